@@ -1,0 +1,282 @@
+//! GMM-EM registration of the visible nodes to the cloud (Eq. 1-5, with the
+//! corrections of the project's algorithm notes): each visible node is the
+//! mean of an isotropic Gaussian of shared variance `sigma^2`, plus one
+//! uniform outlier component of weight `w`. Hidden nodes take no part.
+
+use alloc::vec;
+use alloc::vec::Vec;
+
+use crate::math::{self, Vec3};
+
+/// Dimension of the points (`D` in the paper).
+const DIM: f64 = 3.0;
+
+/// Beyond this many `2 sigma^2`, a Gaussian term is taken as zero
+/// (`exp(-50)` is below 2e-22, far under any outlier term).
+const EXPONENT_CUTOFF: f64 = 50.0;
+
+/// A node whose total responsibility is below this keeps its position.
+const MIN_RESPONSIBILITY: f64 = 1e-9;
+
+/// Settings of one registration.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EmSettings {
+    /// Weight `w` of the uniform outlier component, in `[0, 1)`.
+    pub outlier_weight: f64,
+    /// Stop when no node moves more than this in one iteration, metres.
+    pub tolerance: f64,
+    /// Most EM iterations.
+    pub max_iterations: u32,
+    /// Floor of `sigma^2`, square metres.
+    pub min_variance: f64,
+}
+
+/// What one registration did.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EmReport {
+    /// Iterations run.
+    pub iterations: u32,
+    /// Final `sigma^2`, square metres.
+    pub variance: f64,
+    /// `true` when the tolerance was met before the iteration cap.
+    pub converged: bool,
+}
+
+/// Starting `sigma^2`: the mean squared distance from each point to its
+/// nearest participating node, per dimension, kept between the floor and the
+/// square of the mean node spacing (a larger start would let unregularised
+/// nodes collapse onto the cloud's centroid).
+pub fn initial_variance(cloud: &[Vec3], nodes: &[Vec3], active: &[bool], min_variance: f64) -> f64 {
+    let mut sum = 0.0;
+    let mut n = 0usize;
+    for x in cloud {
+        let d2 = nodes
+            .iter()
+            .zip(active)
+            .filter(|(_, &a)| a)
+            .map(|(y, _)| (x - y).norm_squared())
+            .fold(f64::INFINITY, f64::min);
+        if d2.is_finite() {
+            sum += d2;
+            n += 1;
+        }
+    }
+    let cap = if nodes.len() > 1 {
+        let spacing = crate::resampling::polyline_length(nodes) / (nodes.len() - 1) as f64;
+        (spacing * spacing).max(min_variance)
+    } else {
+        f64::INFINITY
+    };
+    if n == 0 {
+        return cap;
+    }
+    (sum / (n as f64 * DIM)).clamp(min_variance, cap)
+}
+
+/// Registers the nodes marked `active` to `cloud` in place (Eq. 4-5).
+///
+/// E-step: `P(m|x) = exp(-|x - y_m|^2 / 2 sigma^2) / (sum_k exp(...) + mu)`,
+/// `mu = (2 pi sigma^2)^(D/2) w K / ((1 - w) N)` for `K` active nodes and
+/// `N` points. M-step: `y_m = sum_n P x_n / sum_n P` and
+/// `sigma^2 = sum P |x - y|^2 / (D sum P)`.
+pub fn register(
+    cloud: &[Vec3],
+    nodes: &mut [Vec3],
+    active: &[bool],
+    settings: &EmSettings,
+) -> EmReport {
+    let idx: Vec<usize> = (0..nodes.len())
+        .filter(|&m| active.get(m).copied().unwrap_or(false) && math::is_finite(&nodes[m]))
+        .collect();
+    let mut variance = settings.min_variance;
+    if idx.is_empty() || cloud.is_empty() {
+        return EmReport {
+            iterations: 0,
+            variance,
+            converged: true,
+        };
+    }
+    let participating: Vec<bool> = (0..nodes.len()).map(|m| idx.contains(&m)).collect();
+    variance = initial_variance(cloud, nodes, &participating, settings.min_variance);
+    let k = idx.len();
+    let n = cloud.len() as f64;
+    let w = settings.outlier_weight;
+
+    let mut p1 = vec![0.0; k];
+    let mut px = vec![Vec3::zeros(); k];
+    let mut pxx = vec![0.0; k];
+    let mut g = vec![0.0; k];
+    let mut iterations = 0;
+    let mut converged = false;
+
+    while iterations < settings.max_iterations {
+        iterations += 1;
+        p1.fill(0.0);
+        px.fill(Vec3::zeros());
+        pxx.fill(0.0);
+        let two_var = 2.0 * variance;
+        let mu = libm::pow(core::f64::consts::TAU * variance, DIM / 2.0) * w * k as f64
+            / ((1.0 - w) * n);
+
+        for x in cloud {
+            let mut denom = mu;
+            for (j, &m) in idx.iter().enumerate() {
+                let e = (x - nodes[m]).norm_squared() / two_var;
+                g[j] = if e < EXPONENT_CUTOFF {
+                    math::exp(-e)
+                } else {
+                    0.0
+                };
+                denom += g[j];
+            }
+            if !(denom > 0.0) {
+                continue;
+            }
+            let x2 = x.norm_squared();
+            for j in 0..k {
+                if g[j] > 0.0 {
+                    let p = g[j] / denom;
+                    p1[j] += p;
+                    px[j] += x * p;
+                    pxx[j] += p * x2;
+                }
+            }
+        }
+
+        let mut max_shift2: f64 = 0.0;
+        let mut spread = 0.0;
+        let mut total = 0.0;
+        for (j, &m) in idx.iter().enumerate() {
+            if p1[j] > MIN_RESPONSIBILITY {
+                let y = px[j] / p1[j];
+                max_shift2 = max_shift2.max((y - nodes[m]).norm_squared());
+                nodes[m] = y;
+                // sum_n P |x_n - y|^2 with y the weighted mean.
+                spread += (pxx[j] - px[j].norm_squared() / p1[j]).max(0.0);
+                total += p1[j];
+            }
+        }
+        if total > MIN_RESPONSIBILITY {
+            let v = spread / (DIM * total);
+            variance = if v.is_finite() {
+                v.max(settings.min_variance)
+            } else {
+                settings.min_variance
+            };
+        }
+        if math::sqrt(max_shift2) < settings.tolerance {
+            converged = true;
+            break;
+        }
+    }
+    EmReport {
+        iterations,
+        variance,
+        converged,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::SplitMix64;
+
+    fn settings() -> EmSettings {
+        EmSettings {
+            outlier_weight: 0.1,
+            tolerance: 1e-7,
+            max_iterations: 200,
+            min_variance: 1e-8,
+        }
+    }
+
+    #[test]
+    fn one_node_moves_to_the_mean_of_a_symmetric_cluster() {
+        // Four points symmetric about (1, 1, 1); a node started nearby ends
+        // at their mean, which the weighted mean gives exactly by symmetry.
+        let c = Vec3::new(1.0, 1.0, 1.0);
+        let cloud = [
+            c + Vec3::new(0.01, 0.0, 0.0),
+            c - Vec3::new(0.01, 0.0, 0.0),
+            c + Vec3::new(0.0, 0.01, 0.0),
+            c - Vec3::new(0.0, 0.01, 0.0),
+        ];
+        let mut nodes = [c + Vec3::new(0.002, -0.001, 0.0)];
+        let r = register(&cloud, &mut nodes, &[true], &settings());
+        assert!(r.converged);
+        assert!((nodes[0] - c).norm() < 1e-6, "{:?}", nodes[0]);
+        // sigma^2 = mean squared distance / D = 1e-4 / 3.
+        assert!((r.variance - 1e-4 / 3.0).abs() < 1e-7, "{}", r.variance);
+    }
+
+    #[test]
+    fn hidden_nodes_do_not_move_or_absorb_points() {
+        let cloud: Vec<Vec3> = (0..20)
+            .map(|i| Vec3::new(i as f64 * 0.001, 0.0, 0.6))
+            .collect();
+        let hidden = Vec3::new(0.0105, 0.0, 0.6);
+        let mut nodes = [Vec3::new(0.005, 0.003, 0.6), hidden];
+        register(&cloud, &mut nodes, &[true, false], &settings());
+        assert_eq!(nodes[1], hidden);
+        // The visible node takes the whole cloud: it ends at its mean x.
+        assert!((nodes[0].x - 0.0095).abs() < 1e-4, "{:?}", nodes[0]);
+        assert!(nodes[0].y.abs() < 1e-4);
+    }
+
+    #[test]
+    fn two_nodes_split_two_clusters() {
+        let mut cloud = Vec::new();
+        let mut rng = SplitMix64::new(3);
+        for _ in 0..50 {
+            cloud.push(Vec3::new(rng.normal() * 0.002, rng.normal() * 0.002, 0.6));
+            cloud.push(Vec3::new(
+                0.05 + rng.normal() * 0.002,
+                rng.normal() * 0.002,
+                0.6,
+            ));
+        }
+        let mut nodes = [Vec3::new(0.008, 0.0, 0.6), Vec3::new(0.04, 0.0, 0.6)];
+        register(&cloud, &mut nodes, &[true, true], &settings());
+        assert!(
+            nodes[0].x.abs() < 1e-3 && (nodes[1].x - 0.05).abs() < 1e-3,
+            "{nodes:?}"
+        );
+    }
+
+    #[test]
+    fn empty_inputs_leave_nodes_as_they_are() {
+        let mut nodes = [Vec3::new(1.0, 2.0, 3.0)];
+        let r = register(&[], &mut nodes, &[true], &settings());
+        assert_eq!(r.iterations, 0);
+        assert_eq!(nodes[0], Vec3::new(1.0, 2.0, 3.0));
+        let r = register(&[Vec3::zeros()], &mut nodes, &[false], &settings());
+        assert_eq!(r.iterations, 0);
+    }
+
+    /// Property: any finite cloud and finite nodes give finite nodes.
+    #[test]
+    fn random_finite_inputs_give_finite_outputs() {
+        let mut rng = SplitMix64::new(99);
+        for case in 0..200 {
+            let n = rng.below(60) as usize;
+            let scale = [1e-6, 1e-3, 1.0, 1e3][rng.below(4) as usize];
+            let cloud: Vec<Vec3> = (0..n)
+                .map(|_| Vec3::new(rng.normal(), rng.normal(), rng.normal()) * scale)
+                .collect();
+            let m = 1 + rng.below(30) as usize;
+            let mut nodes: Vec<Vec3> = (0..m)
+                .map(|_| Vec3::new(rng.normal(), rng.normal(), rng.normal()) * scale)
+                .collect();
+            let active: Vec<bool> = (0..m).map(|_| rng.uniform() < 0.7).collect();
+            let s = EmSettings {
+                outlier_weight: rng.range(0.0, 0.99),
+                tolerance: 1e-6,
+                max_iterations: 30,
+                min_variance: 1e-8,
+            };
+            let r = register(&cloud, &mut nodes, &active, &s);
+            assert!(nodes.iter().all(math::is_finite), "case {case}");
+            assert!(r.variance.is_finite() && r.variance > 0.0, "case {case}");
+        }
+    }
+}

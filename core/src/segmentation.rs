@@ -1,0 +1,326 @@
+//! Colour segmentation: HSV thresholds in OpenCV's 8-bit convention
+//! (H 0..179, S and V 0..255), applied after the occlusion rectangles are
+//! blacked out, as the UPETrack and TrackDLO evaluations do.
+
+use alloc::vec;
+use alloc::vec::Vec;
+
+use crate::frame::Frame;
+
+/// Largest hue value in OpenCV's 8-bit convention.
+pub const HUE_MAX: u8 = 179;
+
+/// Errors in segmentation settings.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SegmentationError {
+    /// A hue bound is above [`HUE_MAX`].
+    #[error("hue bound {value} is out of range (OpenCV hue is 0..=179)")]
+    HueOutOfRange {
+        /// The rejected hue.
+        value: u8,
+    },
+    /// A saturation or value lower bound is above its upper bound.
+    #[error("{channel} range is inverted: lower {lower} > upper {upper}")]
+    InvertedRange {
+        /// `saturation` or `value`.
+        channel: &'static str,
+        /// Lower bound.
+        lower: u8,
+        /// Upper bound.
+        upper: u8,
+    },
+}
+
+/// An inclusive HSV box. A lower hue above the upper hue wraps through 0
+/// (for red ropes); saturation and value never wrap.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct HsvRange {
+    /// `[h, s, v]` lower bounds.
+    pub lower: [u8; 3],
+    /// `[h, s, v]` upper bounds.
+    pub upper: [u8; 3],
+}
+
+impl Default for HsvRange {
+    /// TrackDLO's thresholds for a blue rope: lower (90, 90, 30), upper (130, 255, 255).
+    fn default() -> Self {
+        Self {
+            lower: [90, 90, 30],
+            upper: [130, 255, 255],
+        }
+    }
+}
+
+impl HsvRange {
+    /// Checks the bounds (hue in range, S and V not inverted).
+    pub fn validate(&self) -> Result<(), SegmentationError> {
+        for h in [self.lower[0], self.upper[0]] {
+            if h > HUE_MAX {
+                return Err(SegmentationError::HueOutOfRange { value: h });
+            }
+        }
+        for (i, channel) in [(1, "saturation"), (2, "value")] {
+            if self.lower[i] > self.upper[i] {
+                return Err(SegmentationError::InvertedRange {
+                    channel,
+                    lower: self.lower[i],
+                    upper: self.upper[i],
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// `true` when the HSV triple lies in the box.
+    #[inline]
+    pub fn contains(&self, hsv: [u8; 3]) -> bool {
+        let [h, s, v] = hsv;
+        let hue_ok = if self.lower[0] <= self.upper[0] {
+            h >= self.lower[0] && h <= self.upper[0]
+        } else {
+            h >= self.lower[0] || h <= self.upper[0]
+        };
+        hue_ok
+            && s >= self.lower[1]
+            && s <= self.upper[1]
+            && v >= self.lower[2]
+            && v <= self.upper[2]
+    }
+}
+
+/// An axis-aligned rectangle in pixels (x, y of the top-left corner, width, height).
+/// It may reach outside the image; only the part inside is used.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Rect {
+    /// Left edge, pixels.
+    pub x: i64,
+    /// Top edge, pixels.
+    pub y: i64,
+    /// Width, pixels.
+    pub w: i64,
+    /// Height, pixels.
+    pub h: i64,
+}
+
+impl Rect {
+    /// The part of the rectangle inside a `width` x `height` image, as
+    /// half-open pixel ranges `(x0, x1, y0, y1)`, or `None` if empty.
+    pub fn clip(&self, width: u32, height: u32) -> Option<(usize, usize, usize, usize)> {
+        let x0 = self.x.max(0);
+        let y0 = self.y.max(0);
+        let x1 = self.x.saturating_add(self.w.max(0)).min(width as i64);
+        let y1 = self.y.saturating_add(self.h.max(0)).min(height as i64);
+        if x0 >= x1 || y0 >= y1 {
+            return None;
+        }
+        Some((x0 as usize, x1 as usize, y0 as usize, y1 as usize))
+    }
+
+    /// `true` when pixel `(u, v)` is inside.
+    pub fn contains(&self, u: i64, v: i64) -> bool {
+        u >= self.x
+            && v >= self.y
+            && u < self.x.saturating_add(self.w)
+            && v < self.y.saturating_add(self.h)
+    }
+}
+
+/// A binary image: `true` where the rope was segmented.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Mask {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Row-major, one entry per pixel.
+    pub data: Vec<bool>,
+}
+
+impl Mask {
+    /// An all-false mask.
+    pub fn new(width: u32, height: u32) -> Self {
+        Self {
+            width,
+            height,
+            data: vec![false; width as usize * height as usize],
+        }
+    }
+
+    /// The value at `(u, v)`, `false` outside the image.
+    #[inline]
+    pub fn get(&self, u: i64, v: i64) -> bool {
+        if u < 0 || v < 0 || u >= self.width as i64 || v >= self.height as i64 {
+            return false;
+        }
+        self.data[v as usize * self.width as usize + u as usize]
+    }
+
+    /// Number of set pixels.
+    pub fn count(&self) -> usize {
+        self.data.iter().filter(|&&b| b).count()
+    }
+}
+
+/// `round((255 << 12) / v)`, OpenCV's saturation divisor table.
+const fn saturation_divisors() -> [i32; 256] {
+    let mut t = [0i32; 256];
+    let mut i = 1;
+    while i < 256 {
+        t[i] = ((255 << 12) + i as i32 / 2) / i as i32;
+        i += 1;
+    }
+    t
+}
+
+/// `round((180 << 12) / (6 d))`, OpenCV's hue divisor table for 8-bit hue.
+const fn hue_divisors() -> [i32; 256] {
+    let mut t = [0i32; 256];
+    let mut i = 1;
+    while i < 256 {
+        let den = 6 * i as i32;
+        t[i] = ((180 << 12) + den / 2) / den;
+        i += 1;
+    }
+    t
+}
+
+static SDIV: [i32; 256] = saturation_divisors();
+static HDIV: [i32; 256] = hue_divisors();
+
+/// RGB to HSV as OpenCV's `cvtColor(..., COLOR_RGB2HSV)` does for 8-bit
+/// images: H in 0..=179, S and V in 0..=255 (fixed-point, same rounding).
+#[inline]
+pub fn rgb_to_hsv(rgb: [u8; 3]) -> [u8; 3] {
+    let (r, g, b) = (rgb[0] as i32, rgb[1] as i32, rgb[2] as i32);
+    let v = r.max(g).max(b);
+    let min = r.min(g).min(b);
+    let diff = v - min;
+    let s = (diff * SDIV[v as usize] + (1 << 11)) >> 12;
+    let h_raw = if diff == 0 {
+        0
+    } else if v == r {
+        g - b
+    } else if v == g {
+        b - r + 2 * diff
+    } else {
+        r - g + 4 * diff
+    };
+    let mut h = (h_raw * HDIV[diff as usize] + (1 << 11)) >> 12;
+    if h < 0 {
+        h += 180;
+    }
+    if h >= 180 {
+        h -= 180;
+    }
+    [h as u8, s as u8, v as u8]
+}
+
+/// Segments `frame` with `range` after setting the colour pixels inside each
+/// of `occlusions` to black (depth is left as it is).
+pub fn segment(frame: &Frame<'_>, range: &HsvRange, occlusions: &[Rect]) -> Mask {
+    let mut mask = Mask::new(frame.width, frame.height);
+    for (i, px) in frame.color.chunks_exact(3).enumerate() {
+        mask.data[i] = range.contains(rgb_to_hsv([px[0], px[1], px[2]]));
+    }
+    let black_in_range = range.contains(rgb_to_hsv([0, 0, 0]));
+    let width = frame.width as usize;
+    for rect in occlusions {
+        if let Some((x0, x1, y0, y1)) = rect.clip(frame.width, frame.height) {
+            for v in y0..y1 {
+                mask.data[v * width + x0..v * width + x1].fill(black_in_range);
+            }
+        }
+    }
+    mask
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hsv_matches_opencv_on_primary_and_mixed_colours() {
+        // Values computed with OpenCV's formula by hand.
+        assert_eq!(rgb_to_hsv([255, 0, 0]), [0, 255, 255]);
+        assert_eq!(rgb_to_hsv([0, 255, 0]), [60, 255, 255]);
+        assert_eq!(rgb_to_hsv([0, 0, 255]), [120, 255, 255]);
+        assert_eq!(rgb_to_hsv([0, 255, 255]), [90, 255, 255]);
+        assert_eq!(rgb_to_hsv([0, 0, 0]), [0, 0, 0]);
+        assert_eq!(rgb_to_hsv([128, 128, 128]), [0, 0, 128]);
+        // A rope blue like TrackDLO's: v = b, h = 240 + 60 (r - g) / diff = 216 deg -> 108;
+        // s = 255 * 100 / 120 = 212.5 -> 213 with OpenCV's fixed-point rounding.
+        assert_eq!(rgb_to_hsv([20, 60, 120]), [108, 213, 120]);
+        // Magenta wraps: v = r = b; OpenCV takes the r branch: h = 60 (g - b)/diff = -60 deg -> 150.
+        assert_eq!(rgb_to_hsv([255, 0, 255]), [150, 255, 255]);
+    }
+
+    #[test]
+    fn hue_range_wraps_through_zero() {
+        let red = HsvRange {
+            lower: [170, 100, 50],
+            upper: [10, 255, 255],
+        };
+        assert!(red.validate().is_ok());
+        assert!(red.contains([175, 200, 200]));
+        assert!(red.contains([5, 200, 200]));
+        assert!(!red.contains([90, 200, 200]));
+    }
+
+    #[test]
+    fn bad_ranges_are_rejected() {
+        let r = HsvRange {
+            lower: [0, 200, 0],
+            upper: [179, 100, 255],
+        };
+        assert!(matches!(
+            r.validate(),
+            Err(SegmentationError::InvertedRange {
+                channel: "saturation",
+                ..
+            })
+        ));
+        let r = HsvRange {
+            lower: [0, 0, 0],
+            upper: [200, 255, 255],
+        };
+        assert!(matches!(
+            r.validate(),
+            Err(SegmentationError::HueOutOfRange { value: 200 })
+        ));
+    }
+
+    #[test]
+    fn occlusion_rectangles_black_out_pixels_and_clip_to_the_image() {
+        let color: Vec<u8> = [20u8, 60, 120].repeat(16);
+        let depth = [600u16; 16];
+        let f = Frame::new(4, 4, &color, &depth, 0.001).expect("frame");
+        let range = HsvRange::default();
+        let m = segment(&f, &range, &[]);
+        assert_eq!(m.count(), 16);
+        let rects = [
+            Rect {
+                x: -2,
+                y: -2,
+                w: 3,
+                h: 3,
+            },
+            Rect {
+                x: 3,
+                y: 3,
+                w: 100,
+                h: 100,
+            },
+            Rect {
+                x: 50,
+                y: 50,
+                w: 5,
+                h: 5,
+            },
+        ];
+        let m = segment(&f, &range, &rects);
+        assert_eq!(m.count(), 14);
+        assert!(!m.get(0, 0) && !m.get(3, 3) && m.get(1, 1));
+    }
+}

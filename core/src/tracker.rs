@@ -1,0 +1,328 @@
+//! The tracker: state between frames and the per-frame pipeline
+//! (segmentation, point cloud, then initialisation or visibility,
+//! registration, occlusion estimate and resampling).
+
+use alloc::vec;
+use alloc::vec::Vec;
+
+use crate::camera::{CameraError, CameraIntrinsics};
+use crate::frame::{Frame, FrameError};
+use crate::initialisation::{initialise, InitError};
+use crate::math::{self, Vec3};
+use crate::occlusion::estimate_hidden;
+use crate::params::{Params, ParamsError};
+use crate::point_cloud::build_cloud;
+use crate::registration::register;
+use crate::resampling::{polyline_length, resample_uniform};
+use crate::segmentation::{segment, HsvRange, Mask, Rect, SegmentationError};
+use crate::visibility::visible_nodes;
+
+/// Errors building or reconfiguring a tracker.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum TrackerError {
+    /// Invalid parameters.
+    #[error(transparent)]
+    Params(#[from] ParamsError),
+    /// Invalid intrinsics.
+    #[error(transparent)]
+    Camera(#[from] CameraError),
+    /// Invalid HSV range.
+    #[error(transparent)]
+    Segmentation(#[from] SegmentationError),
+    /// A frame that does not fit the camera.
+    #[error(transparent)]
+    Frame(#[from] FrameError),
+}
+
+/// Why a frame produced no tracked nodes.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum LostReason {
+    /// The tracker has never been initialised and could not be now.
+    #[error("not initialised: {0}")]
+    NotInitialised(InitError),
+    /// No node had enough points nearby; re-initialisation failed too.
+    #[error("no node is visible and the rope could not be found again: {0}")]
+    NoVisibleNodes(InitError),
+    /// Tracking was lost earlier and the rope is not back in full view.
+    #[error("still lost: {0}")]
+    StillLost(InitError),
+    /// The rope found is shorter than the fraction of its known length needed to re-initialise.
+    #[error("rope only partly in view ({found_mm:.0} mm of {known_mm:.0} mm)")]
+    PartlyInView {
+        /// Length found, millimetres.
+        found_mm: f64,
+        /// Length at the first initialisation, millimetres.
+        known_mm: f64,
+    },
+}
+
+/// What happened in one frame.
+#[derive(Debug, Clone, PartialEq)]
+pub enum FrameStatus {
+    /// Nodes were placed from scratch (first frame, or after a loss).
+    Initialised,
+    /// Nodes were tracked from the previous frame.
+    Tracked,
+    /// No tracking this frame; the nodes shown are the last known ones.
+    Lost(LostReason),
+}
+
+/// The result of one frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameOutput {
+    /// The `M` nodes in order along the rope (empty if never initialised).
+    pub nodes: Vec<Vec3>,
+    /// The visibility decision of each node.
+    pub visible: Vec<bool>,
+    /// How the nodes were obtained.
+    pub status: FrameStatus,
+}
+
+impl FrameOutput {
+    /// `true` when the frame was lost.
+    pub fn is_lost(&self) -> bool {
+        matches!(self.status, FrameStatus::Lost(_))
+    }
+}
+
+/// The segmented mask and point cloud of a frame: everything the tracking
+/// step needs, ready before it starts.
+#[derive(Debug, Clone)]
+pub struct Observation {
+    /// The rope mask after occlusion rectangles.
+    pub mask: Mask,
+    /// The downsampled cloud on the rope's centre line, metres.
+    pub cloud: Vec<Vec3>,
+}
+
+#[derive(Debug, Clone)]
+struct TrackState {
+    nodes: Vec<Vec3>,
+    lost: bool,
+}
+
+/// Tracks one rope across the frames of one camera.
+#[derive(Debug, Clone)]
+pub struct Tracker {
+    params: Params,
+    camera: CameraIntrinsics,
+    hsv: HsvRange,
+    state: Option<TrackState>,
+    /// Length at the first initialisation, metres.
+    known_length: Option<f64>,
+}
+
+impl Tracker {
+    /// A tracker for `camera`, segmenting with `hsv`.
+    pub fn new(
+        params: Params,
+        camera: CameraIntrinsics,
+        hsv: HsvRange,
+    ) -> Result<Self, TrackerError> {
+        params.validate()?;
+        camera.validate()?;
+        hsv.validate()?;
+        Ok(Self {
+            params,
+            camera,
+            hsv,
+            state: None,
+            known_length: None,
+        })
+    }
+
+    /// The parameters in force.
+    pub fn params(&self) -> &Params {
+        &self.params
+    }
+
+    /// The camera.
+    pub fn camera(&self) -> &CameraIntrinsics {
+        &self.camera
+    }
+
+    /// The HSV range in force.
+    pub fn hsv(&self) -> &HsvRange {
+        &self.hsv
+    }
+
+    /// The current nodes (empty before the first initialisation).
+    pub fn nodes(&self) -> &[Vec3] {
+        self.state.as_ref().map_or(&[], |s| &s.nodes)
+    }
+
+    /// Replaces the parameters; takes effect at the next frame. A new node
+    /// count resamples the current nodes along the same curve.
+    pub fn set_params(&mut self, params: Params) -> Result<(), TrackerError> {
+        params.validate()?;
+        if let Some(state) = self.state.as_mut() {
+            if state.nodes.len() != params.node_count {
+                state.nodes = resample_uniform(&state.nodes, params.node_count);
+            }
+        }
+        self.params = params;
+        Ok(())
+    }
+
+    /// Replaces the HSV range.
+    pub fn set_hsv(&mut self, hsv: HsvRange) -> Result<(), TrackerError> {
+        hsv.validate()?;
+        self.hsv = hsv;
+        Ok(())
+    }
+
+    /// Forgets the state: the next frame initialises again.
+    pub fn reset(&mut self) {
+        self.state = None;
+        self.known_length = None;
+    }
+
+    /// Segmentation and point cloud of `frame`, with `occlusions` blacked out.
+    pub fn observe(
+        &self,
+        frame: &Frame<'_>,
+        occlusions: &[Rect],
+    ) -> Result<Observation, TrackerError> {
+        frame.check_camera(&self.camera)?;
+        let mask = segment(frame, &self.hsv, occlusions);
+        let cloud = build_cloud(frame, &mask, &self.camera, &self.params.cloud());
+        Ok(Observation { mask, cloud })
+    }
+
+    /// The tracking step on an observation of `frame`. Never fails: a frame
+    /// that cannot be tracked is reported as lost and the state is kept.
+    pub fn update(&mut self, frame: &Frame<'_>, obs: &Observation) -> FrameOutput {
+        let Some(state) = self.state.as_ref() else {
+            return match self.try_initialise(frame, obs) {
+                Ok(out) => out,
+                Err(ReinitFailure::Init(e)) => self.lost(LostReason::NotInitialised(e)),
+                Err(other) => self.lost(other.into()),
+            };
+        };
+        if state.lost {
+            return match self.try_initialise(frame, obs) {
+                Ok(out) => out,
+                Err(reason) => self.lost(reason_after_loss(reason, false)),
+            };
+        }
+
+        let p = &self.params;
+        let prev = state.nodes.clone();
+        let visible = visible_nodes(
+            &prev,
+            &obs.cloud,
+            p.visibility_radius,
+            p.visibility_min_points as usize,
+        );
+        if !visible.iter().any(|&v| v) {
+            return match self.try_initialise(frame, obs) {
+                Ok(out) => out,
+                Err(reason) => {
+                    if let Some(s) = self.state.as_mut() {
+                        s.lost = true;
+                    }
+                    self.lost(reason_after_loss(reason, true))
+                }
+            };
+        }
+        let mut nodes = prev.clone();
+        register(&obs.cloud, &mut nodes, &visible, &p.em());
+        estimate_hidden(&mut nodes, &visible, &prev, &p.upe());
+        let mut nodes = resample_uniform(&nodes, p.node_count);
+        if nodes.len() != p.node_count || !nodes.iter().all(math::is_finite) {
+            // Cannot happen with finite inputs; keep the last good state if it does.
+            nodes = prev;
+        }
+        self.state = Some(TrackState {
+            nodes: nodes.clone(),
+            lost: false,
+        });
+        FrameOutput {
+            nodes,
+            visible,
+            status: FrameStatus::Tracked,
+        }
+    }
+
+    /// [`Tracker::observe`] then [`Tracker::update`].
+    pub fn process(
+        &mut self,
+        frame: &Frame<'_>,
+        occlusions: &[Rect],
+    ) -> Result<FrameOutput, TrackerError> {
+        let obs = self.observe(frame, occlusions)?;
+        Ok(self.update(frame, &obs))
+    }
+
+    fn try_initialise(
+        &mut self,
+        frame: &Frame<'_>,
+        obs: &Observation,
+    ) -> Result<FrameOutput, ReinitFailure> {
+        let init = initialise(frame, &obs.mask, &self.camera, &self.params)
+            .map_err(ReinitFailure::Init)?;
+        if let Some(known) = self.known_length {
+            if init.length < self.params.reinit_length_fraction * known {
+                return Err(ReinitFailure::Short {
+                    found: init.length,
+                    known,
+                });
+            }
+        } else {
+            self.known_length = Some(init.length);
+        }
+        let p = &self.params;
+        let visible = visible_nodes(
+            &init.nodes,
+            &obs.cloud,
+            p.visibility_radius,
+            p.visibility_min_points as usize,
+        );
+        self.state = Some(TrackState {
+            nodes: init.nodes.clone(),
+            lost: false,
+        });
+        Ok(FrameOutput {
+            nodes: init.nodes,
+            visible,
+            status: FrameStatus::Initialised,
+        })
+    }
+
+    fn lost(&self, reason: LostReason) -> FrameOutput {
+        let nodes = self.nodes().to_vec();
+        FrameOutput {
+            visible: vec![false; nodes.len()],
+            nodes,
+            status: FrameStatus::Lost(reason),
+        }
+    }
+
+    /// Length of the current node polyline, metres.
+    pub fn current_length(&self) -> f64 {
+        polyline_length(self.nodes())
+    }
+}
+
+/// Why a re-initialisation attempt failed.
+enum ReinitFailure {
+    Init(InitError),
+    Short { found: f64, known: f64 },
+}
+
+fn reason_after_loss(f: ReinitFailure, just_lost: bool) -> LostReason {
+    match f {
+        ReinitFailure::Init(e) if just_lost => LostReason::NoVisibleNodes(e),
+        ReinitFailure::Init(e) => LostReason::StillLost(e),
+        ReinitFailure::Short { found, known } => LostReason::PartlyInView {
+            found_mm: found * 1000.0,
+            known_mm: known * 1000.0,
+        },
+    }
+}
+
+impl From<ReinitFailure> for LostReason {
+    fn from(f: ReinitFailure) -> Self {
+        reason_after_loss(f, false)
+    }
+}
