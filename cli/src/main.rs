@@ -1,0 +1,261 @@
+//! The `upetrack` command: track sequences, evaluate against ground truth,
+//! write synthetic scenarios, and benchmark the per-frame cost.
+
+mod bench;
+mod synth;
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+use upetrack::Params;
+use upetrack_io::eval::{summarise, Summary};
+use upetrack_io::run::track_sequence;
+use upetrack_io::{FolderSource, Sequence, SequenceError};
+
+const USAGE: &str = "\
+upetrack: track a rope in RGB-D sequences (UPETrack)
+
+USAGE:
+  upetrack track <sequence> --out <result.json> [--params <params.json>]
+  upetrack eval <sequence>... [--params <params.json>] [--json <out.json>] [--markdown <out.md>]
+  upetrack synth <scenario> <dir> [--frames N] [--seed S] [--hd]
+  upetrack bench [<sequence>...] [--frames N]
+  upetrack scenarios
+
+A sequence is a folder in the layout of docs/sequence-format.md.
+Scenarios: static-s, dynamic-pull, tip-drag, sweep-10..sweep-50, lifted-swing, fast-pull.";
+
+/// A command-line error with its message.
+struct CliError(String);
+
+impl From<SequenceError> for CliError {
+    fn from(e: SequenceError) -> Self {
+        Self(e.to_string())
+    }
+}
+
+/// Parsed arguments: positionals and `--key value` options.
+struct Args {
+    positional: Vec<String>,
+    options: Vec<(String, Option<String>)>,
+}
+
+impl Args {
+    fn parse(raw: &[String], flags: &[&str], valued: &[&str]) -> Result<Self, CliError> {
+        let mut positional = Vec::new();
+        let mut options = Vec::new();
+        let mut it = raw.iter();
+        while let Some(a) = it.next() {
+            if let Some(key) = a.strip_prefix("--") {
+                if flags.contains(&key) {
+                    options.push((key.to_string(), None));
+                } else if valued.contains(&key) {
+                    let v = it
+                        .next()
+                        .ok_or_else(|| CliError(format!("--{key} needs a value")))?;
+                    options.push((key.to_string(), Some(v.clone())));
+                } else {
+                    return Err(CliError(format!("unknown option --{key}\n\n{USAGE}")));
+                }
+            } else {
+                positional.push(a.clone());
+            }
+        }
+        Ok(Self {
+            positional,
+            options,
+        })
+    }
+
+    fn value(&self, key: &str) -> Option<&str> {
+        self.options
+            .iter()
+            .rev()
+            .find(|(k, _)| k == key)
+            .and_then(|(_, v)| v.as_deref())
+    }
+
+    fn flag(&self, key: &str) -> bool {
+        self.options.iter().any(|(k, _)| k == key)
+    }
+
+    fn number<T: std::str::FromStr>(&self, key: &str, default: T) -> Result<T, CliError> {
+        match self.value(key) {
+            None => Ok(default),
+            Some(v) => v
+                .parse()
+                .map_err(|_| CliError(format!("--{key}: `{v}` is not a valid number"))),
+        }
+    }
+}
+
+/// Reads a parameter file (any subset of the fields; the rest take their defaults).
+fn load_params(path: Option<&str>) -> Result<Params, CliError> {
+    let Some(path) = path else {
+        return Ok(Params::default());
+    };
+    let text = std::fs::read_to_string(path).map_err(|e| CliError(format!("{path}: {e}")))?;
+    let params: Params = serde_json::from_str(&text)
+        .map_err(|e| CliError(format!("{path}: invalid parameters: {e}")))?;
+    params
+        .validate()
+        .map_err(|e| CliError(format!("{path}: {e}")))?;
+    Ok(params)
+}
+
+fn open_sequence(path: &str) -> Result<Sequence<FolderSource>, CliError> {
+    let p = Path::new(path);
+    if !p.exists() {
+        return Err(CliError(format!("{path}: no such sequence folder")));
+    }
+    if !p.is_dir() {
+        return Err(CliError(format!(
+            "{path}: not a folder (a sequence is a folder with camera_intrinsic.json, color/ and depth/)"
+        )));
+    }
+    Ok(Sequence::open(FolderSource::new(p))?)
+}
+
+fn now_ms_since(start: Instant) -> impl FnMut() -> f64 {
+    move || start.elapsed().as_secs_f64() * 1000.0
+}
+
+fn cmd_track(raw: &[String]) -> Result<(), CliError> {
+    let args = Args::parse(raw, &[], &["out", "params"])?;
+    let [seq_path] = args.positional.as_slice() else {
+        return Err(CliError(format!("track takes one sequence\n\n{USAGE}")));
+    };
+    let out = args
+        .value("out")
+        .ok_or_else(|| CliError("track needs --out <result.json>".into()))?;
+    let params = load_params(args.value("params"))?;
+    let seq = open_sequence(seq_path)?;
+    let result = track_sequence(&seq, params, &mut now_ms_since(Instant::now()))?;
+    upetrack_io::write::write_json(Path::new(out), &result)?;
+    let lost = result.frames.iter().filter(|f| f.lost).count();
+    eprintln!(
+        "{}: {} frames tracked ({} lost) -> {}",
+        seq_path,
+        result.frames.len(),
+        lost,
+        out
+    );
+    Ok(())
+}
+
+fn fmt(x: f64, digits: usize) -> String {
+    if x.is_finite() {
+        format!("{x:.digits$}")
+    } else {
+        "-".into()
+    }
+}
+
+/// The evaluation table in Markdown.
+fn markdown_table(rows: &[Summary]) -> String {
+    let mut s = String::from(
+        "| sequence | algorithm | frames | lost | mean mm | median mm | IQR mm | mean px | median px | IQR px | occluded mean mm | occluded mean px | frames > 20 mm | median track ms | median total ms |\n\
+         |---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+    );
+    for r in rows {
+        s += &format!(
+            "| {} | {} | {} | {} | {} | {} | {}-{} | {} | {} | {}-{} | {} | {} | {} | {} | {} |\n",
+            r.sequence,
+            r.algorithm,
+            r.frames,
+            r.lost_frames,
+            fmt(r.mm.mean, 2),
+            fmt(r.mm.median, 2),
+            fmt(r.mm.q1, 2),
+            fmt(r.mm.q3, 2),
+            fmt(r.px.mean, 2),
+            fmt(r.px.median, 2),
+            fmt(r.px.q1, 2),
+            fmt(r.px.q3, 2),
+            fmt(r.occluded_mean_mm, 2),
+            fmt(r.occluded_mean_px, 2),
+            r.frames_above_20mm,
+            fmt(r.median_track_ms, 3),
+            fmt(r.median_total_ms, 3),
+        );
+    }
+    s
+}
+
+fn cmd_eval(raw: &[String]) -> Result<(), CliError> {
+    let args = Args::parse(raw, &[], &["params", "json", "markdown"])?;
+    if args.positional.is_empty() {
+        return Err(CliError(format!(
+            "eval takes at least one sequence\n\n{USAGE}"
+        )));
+    }
+    let params = load_params(args.value("params"))?;
+    let mut rows = Vec::new();
+    for path in &args.positional {
+        let seq = open_sequence(path)?;
+        let result = track_sequence(&seq, params, &mut now_ms_since(Instant::now()))?;
+        let name = Path::new(path)
+            .file_name()
+            .map_or(path.clone(), |n| n.to_string_lossy().into_owned());
+        let summary = summarise(
+            &name,
+            &result,
+            &seq.groundtruth,
+            &seq.camera,
+            seq.first_occluded_frame(),
+        );
+        if summary.evaluated_frames == 0 {
+            eprintln!("{path}: no ground truth; errors are not available");
+        }
+        rows.push(summary);
+    }
+    let table = markdown_table(&rows);
+    println!("{table}");
+    if let Some(p) = args.value("json") {
+        upetrack_io::write::write_json(Path::new(p), &rows)?;
+    }
+    if let Some(p) = args.value("markdown") {
+        upetrack_io::write::write_file(Path::new(p), table.as_bytes())?;
+    }
+    Ok(())
+}
+
+fn run(raw: &[String]) -> Result<(), CliError> {
+    let Some((cmd, rest)) = raw.split_first() else {
+        println!("{USAGE}");
+        return Ok(());
+    };
+    match cmd.as_str() {
+        "track" => cmd_track(rest),
+        "eval" => cmd_eval(rest),
+        "synth" => synth::cmd_synth(rest),
+        "bench" => bench::cmd_bench(rest),
+        "scenarios" => {
+            synth::list_scenarios();
+            Ok(())
+        }
+        "-h" | "--help" | "help" => {
+            println!("{USAGE}");
+            Ok(())
+        }
+        other => Err(CliError(format!("unknown command `{other}`\n\n{USAGE}"))),
+    }
+}
+
+fn main() -> ExitCode {
+    let raw: Vec<String> = std::env::args().skip(1).collect();
+    match run(&raw) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(CliError(msg)) => {
+            eprintln!("error: {msg}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Output folder helper shared by subcommands.
+fn ensure_dir(p: &Path) -> Result<PathBuf, CliError> {
+    std::fs::create_dir_all(p).map_err(|e| CliError(format!("{}: {e}", p.display())))?;
+    Ok(p.to_path_buf())
+}

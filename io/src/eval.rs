@@ -1,0 +1,178 @@
+//! Evaluation of a result against ground truth: per-frame errors (Eq. 18)
+//! in millimetres and pixels, and the summary statistics of a sequence.
+
+use serde::Serialize;
+use upetrack::math::Vec3;
+use upetrack::metrics::{frame_error, frame_error_px};
+use upetrack::CameraIntrinsics;
+
+use crate::result::TrackResult;
+
+/// Frames above this error (millimetres) are counted as failures.
+pub const FAILURE_THRESHOLD_MM: f64 = 20.0;
+
+/// Error of one frame with ground truth.
+#[derive(Debug, Clone, Copy, Serialize, PartialEq)]
+pub struct FrameError {
+    /// Frame index.
+    pub frame: usize,
+    /// Frame error in millimetres.
+    pub mm: f64,
+    /// Frame error in pixels.
+    pub px: f64,
+}
+
+/// Per-frame errors of `result`; frames without ground truth or nodes are skipped.
+pub fn frame_errors(
+    result: &TrackResult,
+    truth: &[Option<Vec<Vec3>>],
+    camera: &CameraIntrinsics,
+) -> Vec<FrameError> {
+    result
+        .frames
+        .iter()
+        .filter_map(|f| {
+            let gt = truth.get(f.frame)?.as_ref()?;
+            let nodes: Vec<Vec3> = f
+                .nodes
+                .iter()
+                .map(|p| Vec3::new(p[0], p[1], p[2]))
+                .collect();
+            let mm = frame_error(&nodes, gt)? * 1000.0;
+            let px = frame_error_px(&nodes, gt, camera)?;
+            Some(FrameError {
+                frame: f.frame,
+                mm,
+                px,
+            })
+        })
+        .collect()
+}
+
+/// Quantile `q` in `[0, 1]` of `values` by linear interpolation (NaN when empty).
+pub fn quantile(values: &[f64], q: f64) -> f64 {
+    let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let pos = q.clamp(0.0, 1.0) * (v.len() - 1) as f64;
+    let lo = pos.floor() as usize;
+    let hi = pos.ceil() as usize;
+    v[lo] + (v[hi] - v[lo]) * (pos - lo as f64)
+}
+
+/// Mean (NaN when empty).
+pub fn mean(values: &[f64]) -> f64 {
+    if values.is_empty() {
+        f64::NAN
+    } else {
+        values.iter().sum::<f64>() / values.len() as f64
+    }
+}
+
+/// Mean, median and interquartile range of one error series.
+#[derive(Debug, Clone, Copy, Serialize, PartialEq)]
+pub struct ErrorStats {
+    /// Mean.
+    pub mean: f64,
+    /// Median.
+    pub median: f64,
+    /// First quartile.
+    pub q1: f64,
+    /// Third quartile.
+    pub q3: f64,
+}
+
+impl ErrorStats {
+    /// Statistics of `values`.
+    pub fn of(values: &[f64]) -> Self {
+        Self {
+            mean: mean(values),
+            median: quantile(values, 0.5),
+            q1: quantile(values, 0.25),
+            q3: quantile(values, 0.75),
+        }
+    }
+}
+
+/// The summary of one sequence tracked by one algorithm.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct Summary {
+    /// Sequence name.
+    pub sequence: String,
+    /// Algorithm name.
+    pub algorithm: String,
+    /// Frames in the sequence.
+    pub frames: usize,
+    /// Frames reported lost.
+    pub lost_frames: usize,
+    /// Frames with ground truth and nodes.
+    pub evaluated_frames: usize,
+    /// Frame error in millimetres.
+    pub mm: ErrorStats,
+    /// Frame error in pixels.
+    pub px: ErrorStats,
+    /// Mean error (mm) over frames from the first occluded frame on.
+    pub occluded_mean_mm: f64,
+    /// Mean error (px) over frames from the first occluded frame on.
+    pub occluded_mean_px: f64,
+    /// Largest frame error, mm.
+    pub max_mm: f64,
+    /// Frames above [`FAILURE_THRESHOLD_MM`].
+    pub frames_above_20mm: usize,
+    /// Median tracking step time, ms.
+    pub median_track_ms: f64,
+    /// Median whole-frame time, ms.
+    pub median_total_ms: f64,
+}
+
+/// Summarises `result` against `truth`.
+pub fn summarise(
+    sequence: &str,
+    result: &TrackResult,
+    truth: &[Option<Vec<Vec3>>],
+    camera: &CameraIntrinsics,
+    first_occluded: Option<usize>,
+) -> Summary {
+    let errs = frame_errors(result, truth, camera);
+    let mm: Vec<f64> = errs.iter().map(|e| e.mm).collect();
+    let px: Vec<f64> = errs.iter().map(|e| e.px).collect();
+    let occ: Vec<&FrameError> = match first_occluded {
+        Some(f) => errs.iter().filter(|e| e.frame >= f).collect(),
+        None => Vec::new(),
+    };
+    let track: Vec<f64> = result.frames.iter().map(|f| f.track_ms).collect();
+    let total: Vec<f64> = result.frames.iter().map(|f| f.total_ms).collect();
+    Summary {
+        sequence: sequence.to_string(),
+        algorithm: result.algorithm.clone(),
+        frames: result.frames.len(),
+        lost_frames: result.frames.iter().filter(|f| f.lost).count(),
+        evaluated_frames: errs.len(),
+        mm: ErrorStats::of(&mm),
+        px: ErrorStats::of(&px),
+        occluded_mean_mm: mean(&occ.iter().map(|e| e.mm).collect::<Vec<_>>()),
+        occluded_mean_px: mean(&occ.iter().map(|e| e.px).collect::<Vec<_>>()),
+        max_mm: mm.iter().copied().fold(f64::NAN, f64::max),
+        frames_above_20mm: mm.iter().filter(|&&e| e > FAILURE_THRESHOLD_MM).count(),
+        median_track_ms: quantile(&track, 0.5),
+        median_total_ms: quantile(&total, 0.5),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quantiles_interpolate() {
+        let v = [4.0, 1.0, 3.0, 2.0];
+        assert_eq!(quantile(&v, 0.5), 2.5);
+        assert_eq!(quantile(&v, 0.0), 1.0);
+        assert_eq!(quantile(&v, 1.0), 4.0);
+        assert_eq!(quantile(&v, 0.25), 1.75);
+        assert!(quantile(&[], 0.5).is_nan());
+        assert_eq!(mean(&v), 2.5);
+    }
+}

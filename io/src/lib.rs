@@ -1,0 +1,17 @@
+//! Sequences in the contract's layout (`docs/sequence-format.md`): reading
+//! them from a folder or from files held in memory, decoding colour and
+//! depth images, writing them, the result JSON, and evaluation statistics.
+#![warn(missing_docs)]
+
+pub mod decode;
+pub mod error;
+pub mod eval;
+pub mod result;
+pub mod run;
+pub mod sequence;
+pub mod source;
+pub mod write;
+
+pub use error::SequenceError;
+pub use sequence::{DecodedFrame, Sequence};
+pub use source::{FolderSource, MemorySource, Source};

@@ -1,0 +1,37 @@
+//! The result JSON of the contract: the algorithm, every parameter in force,
+//! and one entry per frame.
+
+use serde::{Deserialize, Serialize};
+use upetrack::Params;
+
+/// One frame of a result.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct FrameRecord {
+    /// Frame index.
+    pub frame: usize,
+    /// Nodes in metres, in order along the rope.
+    pub nodes: Vec<[f64; 3]>,
+    /// Visibility decision per node.
+    pub visible: Vec<bool>,
+    /// Tracking step time, milliseconds.
+    pub track_ms: f64,
+    /// Whole frame time from decoded images, milliseconds.
+    pub total_ms: f64,
+    /// `true` when tracking could not run on this frame.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub lost: bool,
+    /// Why, when lost.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
+}
+
+/// A whole result file.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct TrackResult {
+    /// Algorithm name.
+    pub algorithm: String,
+    /// Parameters in force.
+    pub params: Params,
+    /// One entry per frame, in order.
+    pub frames: Vec<FrameRecord>,
+}

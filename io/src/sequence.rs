@@ -1,0 +1,467 @@
+//! A sequence in the contract's layout: intrinsics, optional `dlo.json` and
+//! ground truth, and colour/depth frame pairs decoded on demand.
+
+use serde::{Deserialize, Serialize};
+use upetrack::math::Vec3;
+use upetrack::{CameraIntrinsics, Frame, HsvRange, Rect};
+
+use crate::decode::{decode_color, decode_depth, RgbImage};
+use crate::error::SequenceError;
+use crate::source::Source;
+
+/// Most frames accepted in one sequence.
+pub const MAX_FRAMES: usize = 100_000;
+/// Most ground-truth points per frame.
+pub const MAX_GROUNDTRUTH_POINTS: usize = 100_000;
+/// Most occlusion entries in `dlo.json`.
+pub const MAX_OCCLUSIONS: usize = 10_000;
+/// Largest JSON file read, bytes.
+pub const MAX_JSON_BYTES: usize = 64 * 1024 * 1024;
+
+/// Default metres per depth unit.
+pub const DEFAULT_DEPTH_SCALE: f64 = 0.001;
+/// Default frame rate.
+pub const DEFAULT_FPS: f64 = 30.0;
+/// Colour folder names accepted, in order of preference.
+pub const COLOR_DIRS: [&str; 3] = ["color", "rgb", "image"];
+
+/// `camera_intrinsic.json` / `intrinsic.json` (Open3D's PinholeCameraIntrinsic).
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct IntrinsicsFile {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Column-major 3x3: `[fx, 0, 0, 0, fy, 0, cx, cy, 1]`.
+    pub intrinsic_matrix: Vec<f64>,
+    /// Depth units per metre (Open3D's newer file), e.g. 1000.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub depth_scale: Option<f64>,
+    /// Frames per second (Open3D's newer file).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fps: Option<f64>,
+}
+
+impl IntrinsicsFile {
+    /// The file for `camera`.
+    pub fn from_camera(camera: &CameraIntrinsics) -> Self {
+        Self {
+            width: camera.width,
+            height: camera.height,
+            intrinsic_matrix: vec![
+                camera.fx, 0.0, 0.0, 0.0, camera.fy, 0.0, camera.cx, camera.cy, 1.0,
+            ],
+            depth_scale: None,
+            fps: None,
+        }
+    }
+}
+
+/// HSV thresholds in `dlo.json`.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct SegmentationConfig {
+    /// `[h, s, v]` lower bounds.
+    pub hsv_lower: [u8; 3],
+    /// `[h, s, v]` upper bounds.
+    pub hsv_upper: [u8; 3],
+}
+
+/// One occlusion entry of `dlo.json`: colour pixels of `rect` blacked out
+/// for frames `frames[0]..=frames[1]`.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct OcclusionConfig {
+    /// Inclusive frame range.
+    pub frames: [u64; 2],
+    /// `[x, y, w, h]` in pixels.
+    pub rect: [i64; 4],
+}
+
+impl OcclusionConfig {
+    /// The rectangle.
+    pub fn rect(&self) -> Rect {
+        let [x, y, w, h] = self.rect;
+        Rect { x, y, w, h }
+    }
+
+    /// `true` when it applies to frame `index`.
+    pub fn active_at(&self, index: usize) -> bool {
+        (self.frames[0]..=self.frames[1]).contains(&(index as u64))
+    }
+}
+
+/// `dlo.json`: what this project adds to a recording. Unknown keys are ignored.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq, Default)]
+pub struct DloConfig {
+    /// Metres per depth unit.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub depth_scale: Option<f64>,
+    /// Frames per second.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fps: Option<f64>,
+    /// HSV thresholds.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub segmentation: Option<SegmentationConfig>,
+    /// Occlusion rectangles.
+    #[serde(default)]
+    pub occlusions: Vec<OcclusionConfig>,
+    /// Ground-truth file name.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub groundtruth: Option<String>,
+}
+
+/// One frame of `groundtruth.json`.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct GroundTruthFrame {
+    /// Frame index.
+    pub frame: usize,
+    /// Ordered centre-line points, metres, colour camera frame.
+    pub points: Vec<[f64; 3]>,
+}
+
+/// `groundtruth.json`.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq, Default)]
+pub struct GroundTruthFile {
+    /// Frames with a reference (any may be missing).
+    pub frames: Vec<GroundTruthFrame>,
+}
+
+/// A decoded colour/depth pair.
+#[derive(Debug, Clone)]
+pub struct DecodedFrame {
+    /// Width.
+    pub width: u32,
+    /// Height.
+    pub height: u32,
+    /// RGB8.
+    pub color: Vec<u8>,
+    /// Depth units.
+    pub depth: Vec<u16>,
+}
+
+impl DecodedFrame {
+    /// The core's borrowed view.
+    pub fn frame(&self, depth_scale: f64) -> Result<Frame<'_>, upetrack::frame::FrameError> {
+        Frame::new(
+            self.width,
+            self.height,
+            &self.color,
+            &self.depth,
+            depth_scale,
+        )
+    }
+}
+
+/// An opened sequence: metadata read and checked, frames decoded on demand.
+pub struct Sequence<S: Source> {
+    source: S,
+    /// Colour intrinsics.
+    pub camera: CameraIntrinsics,
+    /// Metres per depth unit in force.
+    pub depth_scale: f64,
+    /// Frames per second.
+    pub fps: f64,
+    /// HSV range in force (the `dlo.json` one, or the default).
+    pub hsv: HsvRange,
+    /// `dlo.json` as read (defaults when absent).
+    pub config: DloConfig,
+    /// Ground truth per frame index, when available.
+    pub groundtruth: Vec<Option<Vec<Vec3>>>,
+    /// Relative paths of colour frames, name-sorted.
+    pub color_files: Vec<String>,
+    /// Relative paths of depth frames, name-sorted.
+    pub depth_files: Vec<String>,
+}
+
+fn read_json<T: serde::de::DeserializeOwned, S: Source>(
+    source: &S,
+    path: &str,
+) -> Result<T, SequenceError> {
+    let bytes = source.read(path)?;
+    if bytes.len() > MAX_JSON_BYTES {
+        return Err(SequenceError::TooLarge {
+            path: source.display(path),
+            what: "JSON size in bytes",
+            actual: bytes.len() as u64,
+            limit: MAX_JSON_BYTES as u64,
+        });
+    }
+    serde_json::from_slice(&bytes).map_err(|e| SequenceError::Json {
+        path: source.display(path),
+        message: e.to_string(),
+    })
+}
+
+fn sorted_files<S: Source>(
+    source: &S,
+    dir: &str,
+    exts: &[&str],
+) -> Result<Vec<String>, SequenceError> {
+    let mut names: Vec<String> = source
+        .list(dir)?
+        .into_iter()
+        .filter(|n| {
+            let lower = n.to_ascii_lowercase();
+            !n.starts_with('.') && exts.iter().any(|e| lower.ends_with(e))
+        })
+        .collect();
+    names.sort();
+    if names.len() > MAX_FRAMES {
+        return Err(SequenceError::TooLarge {
+            path: source.display(dir),
+            what: "number of frames",
+            actual: names.len() as u64,
+            limit: MAX_FRAMES as u64,
+        });
+    }
+    Ok(names.into_iter().map(|n| format!("{dir}/{n}")).collect())
+}
+
+/// Parses and checks an intrinsics file.
+pub fn camera_from_file(
+    file: &IntrinsicsFile,
+    path: &str,
+) -> Result<CameraIntrinsics, SequenceError> {
+    let m = &file.intrinsic_matrix;
+    if m.len() != 9 {
+        return Err(SequenceError::invalid(
+            path,
+            format!("intrinsic_matrix has {} values, expected 9", m.len()),
+        ));
+    }
+    let camera = CameraIntrinsics {
+        width: file.width,
+        height: file.height,
+        fx: m[0],
+        fy: m[4],
+        cx: m[6],
+        cy: m[7],
+    };
+    camera
+        .validate()
+        .map_err(|e| SequenceError::invalid(path, e.to_string()))?;
+    Ok(camera)
+}
+
+impl<S: Source> Sequence<S> {
+    /// Reads and checks the metadata and lists the frames. No image is decoded.
+    pub fn open(source: S) -> Result<Self, SequenceError> {
+        let intr_path = ["camera_intrinsic.json", "intrinsic.json"]
+            .into_iter()
+            .find(|p| source.is_file(p))
+            .ok_or_else(|| SequenceError::Missing {
+                path: source.display("camera_intrinsic.json"),
+                what: "colour intrinsics (camera_intrinsic.json or intrinsic.json)",
+            })?;
+        let intr: IntrinsicsFile = read_json(&source, intr_path)?;
+        let camera = camera_from_file(&intr, &source.display(intr_path))?;
+
+        let config: DloConfig = if source.is_file("dlo.json") {
+            read_json(&source, "dlo.json")?
+        } else {
+            DloConfig::default()
+        };
+        let dlo_path = source.display("dlo.json");
+        let depth_scale = match (config.depth_scale, intr.depth_scale) {
+            (Some(s), _) => s,
+            (None, Some(units_per_metre)) if units_per_metre != 0.0 => 1.0 / units_per_metre,
+            _ => DEFAULT_DEPTH_SCALE,
+        };
+        if !(depth_scale.is_finite() && depth_scale > 0.0 && depth_scale < 1.0) {
+            return Err(SequenceError::invalid(
+                &dlo_path,
+                format!("depth_scale {depth_scale} must be finite and in (0, 1) metres per unit"),
+            ));
+        }
+        let fps = config.fps.or(intr.fps).unwrap_or(DEFAULT_FPS);
+        if !(fps.is_finite() && fps > 0.0 && fps <= 10_000.0) {
+            return Err(SequenceError::invalid(
+                &dlo_path,
+                format!("fps {fps} must be in (0, 10000]"),
+            ));
+        }
+        let hsv = match &config.segmentation {
+            Some(s) => {
+                let r = HsvRange {
+                    lower: s.hsv_lower,
+                    upper: s.hsv_upper,
+                };
+                r.validate()
+                    .map_err(|e| SequenceError::invalid(&dlo_path, format!("segmentation: {e}")))?;
+                r
+            }
+            None => HsvRange::default(),
+        };
+        if config.occlusions.len() > MAX_OCCLUSIONS {
+            return Err(SequenceError::TooLarge {
+                path: dlo_path,
+                what: "number of occlusions",
+                actual: config.occlusions.len() as u64,
+                limit: MAX_OCCLUSIONS as u64,
+            });
+        }
+        for (i, o) in config.occlusions.iter().enumerate() {
+            if o.frames[0] > o.frames[1] {
+                return Err(SequenceError::invalid(
+                    &dlo_path,
+                    format!("occlusions[{i}]: frames {:?} run backwards", o.frames),
+                ));
+            }
+            if o.rect[2] < 0 || o.rect[3] < 0 {
+                return Err(SequenceError::invalid(
+                    &dlo_path,
+                    format!("occlusions[{i}]: negative width or height in {:?}", o.rect),
+                ));
+            }
+        }
+
+        let color_dir = COLOR_DIRS
+            .into_iter()
+            .find(|d| source.is_dir(d))
+            .ok_or_else(|| SequenceError::Missing {
+                path: source.display("color"),
+                what: "colour frames folder (color/, rgb/ or image/)",
+            })?;
+        if !source.is_dir("depth") {
+            return Err(SequenceError::Missing {
+                path: source.display("depth"),
+                what: "depth frames folder",
+            });
+        }
+        let color_files = sorted_files(&source, color_dir, &[".jpg", ".jpeg", ".png"])?;
+        let depth_files = sorted_files(&source, "depth", &[".png"])?;
+        if color_files.is_empty() {
+            return Err(SequenceError::invalid(
+                &source.display(color_dir),
+                "no .jpg or .png frames",
+            ));
+        }
+        if color_files.len() != depth_files.len() {
+            return Err(SequenceError::invalid(
+                &source.display(""),
+                format!(
+                    "{} colour frames but {} depth frames: frames pair by position, so the counts must match",
+                    color_files.len(),
+                    depth_files.len()
+                ),
+            ));
+        }
+
+        let gt_name = config
+            .groundtruth
+            .clone()
+            .unwrap_or_else(|| "groundtruth.json".to_string());
+        let mut groundtruth = vec![None; color_files.len()];
+        if source.is_file(&gt_name) {
+            let gt: GroundTruthFile = read_json(&source, &gt_name)?;
+            let gt_path = source.display(&gt_name);
+            for f in gt.frames {
+                if f.points.len() > MAX_GROUNDTRUTH_POINTS {
+                    return Err(SequenceError::TooLarge {
+                        path: gt_path,
+                        what: "ground-truth points in one frame",
+                        actual: f.points.len() as u64,
+                        limit: MAX_GROUNDTRUTH_POINTS as u64,
+                    });
+                }
+                if f.points.iter().flatten().any(|c| !c.is_finite()) {
+                    return Err(SequenceError::invalid(
+                        &gt_path,
+                        format!("frame {}: non-finite point", f.frame),
+                    ));
+                }
+                if let Some(slot) = groundtruth.get_mut(f.frame) {
+                    *slot = Some(
+                        f.points
+                            .iter()
+                            .map(|p| Vec3::new(p[0], p[1], p[2]))
+                            .collect(),
+                    );
+                }
+            }
+        } else if config.groundtruth.is_some() {
+            return Err(SequenceError::Missing {
+                path: source.display(&gt_name),
+                what: "ground truth named in dlo.json",
+            });
+        }
+
+        Ok(Self {
+            source,
+            camera,
+            depth_scale,
+            fps,
+            hsv,
+            config,
+            groundtruth,
+            color_files,
+            depth_files,
+        })
+    }
+
+    /// Number of frames.
+    pub fn len(&self) -> usize {
+        self.color_files.len()
+    }
+
+    /// `true` when there are no frames (never, once opened).
+    pub fn is_empty(&self) -> bool {
+        self.color_files.is_empty()
+    }
+
+    /// The occlusion rectangles active at frame `index`.
+    pub fn occlusions_at(&self, index: usize) -> Vec<Rect> {
+        self.config
+            .occlusions
+            .iter()
+            .filter(|o| o.active_at(index))
+            .map(OcclusionConfig::rect)
+            .collect()
+    }
+
+    /// The first frame any occlusion applies to.
+    pub fn first_occluded_frame(&self) -> Option<usize> {
+        self.config
+            .occlusions
+            .iter()
+            .map(|o| o.frames[0] as usize)
+            .min()
+    }
+
+    /// Reads and decodes frame `index`, checking both images against the intrinsics.
+    pub fn frame(&self, index: usize) -> Result<DecodedFrame, SequenceError> {
+        let (Some(cpath), Some(dpath)) = (self.color_files.get(index), self.depth_files.get(index))
+        else {
+            return Err(SequenceError::invalid(
+                &self.source.display(""),
+                format!("no frame {index}"),
+            ));
+        };
+        let color: RgbImage = decode_color(&self.source.read(cpath)?, &self.source.display(cpath))?;
+        let depth = decode_depth(&self.source.read(dpath)?, &self.source.display(dpath))?;
+        for (path, w, h) in [
+            (cpath, color.width, color.height),
+            (dpath, depth.width, depth.height),
+        ] {
+            if (w, h) != (self.camera.width, self.camera.height) {
+                return Err(SequenceError::invalid(
+                    &self.source.display(path),
+                    format!(
+                        "image is {w}x{h} but the intrinsics say {}x{}",
+                        self.camera.width, self.camera.height
+                    ),
+                ));
+            }
+        }
+        Ok(DecodedFrame {
+            width: color.width,
+            height: color.height,
+            color: color.data,
+            depth: depth.data,
+        })
+    }
+
+    /// The underlying source.
+    pub fn source(&self) -> &S {
+        &self.source
+    }
+}

@@ -1,0 +1,219 @@
+//! Where a sequence's files come from: a folder on disk, or files held in
+//! memory (a browser's folder picker, an unpacked .zip).
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use crate::error::SequenceError;
+
+/// Largest single file read, bytes (a 1280x720 PNG is a few MB).
+pub const MAX_FILE_BYTES: u64 = 64 * 1024 * 1024;
+
+/// A tree of files addressed by `/`-separated paths relative to the sequence root.
+pub trait Source {
+    /// Names of the files directly inside folder `dir` ("" for the root), unsorted.
+    fn list(&self, dir: &str) -> Result<Vec<String>, SequenceError>;
+    /// `true` when `path` is a file.
+    fn is_file(&self, path: &str) -> bool;
+    /// `true` when `dir` is a folder.
+    fn is_dir(&self, dir: &str) -> bool;
+    /// The bytes of `path`.
+    fn read(&self, path: &str) -> Result<Vec<u8>, SequenceError>;
+    /// How to name `path` in messages.
+    fn display(&self, path: &str) -> String;
+}
+
+/// A sequence folder on disk.
+#[derive(Debug, Clone)]
+pub struct FolderSource {
+    root: PathBuf,
+}
+
+impl FolderSource {
+    /// The folder at `root`.
+    pub fn new(root: impl Into<PathBuf>) -> Self {
+        Self { root: root.into() }
+    }
+
+    fn path(&self, rel: &str) -> PathBuf {
+        if rel.is_empty() {
+            self.root.clone()
+        } else {
+            self.root.join(rel)
+        }
+    }
+}
+
+impl Source for FolderSource {
+    fn list(&self, dir: &str) -> Result<Vec<String>, SequenceError> {
+        let p = self.path(dir);
+        let io = |source| SequenceError::Io {
+            path: p.display().to_string(),
+            source,
+        };
+        let mut names = Vec::new();
+        for entry in std::fs::read_dir(&p).map_err(io)? {
+            let entry = entry.map_err(io)?;
+            if entry.file_type().map(|t| t.is_file()).unwrap_or(false) {
+                if let Some(name) = entry.file_name().to_str() {
+                    names.push(name.to_string());
+                }
+            }
+        }
+        Ok(names)
+    }
+
+    fn is_file(&self, path: &str) -> bool {
+        self.path(path).is_file()
+    }
+
+    fn is_dir(&self, dir: &str) -> bool {
+        self.path(dir).is_dir()
+    }
+
+    fn read(&self, path: &str) -> Result<Vec<u8>, SequenceError> {
+        let p = self.path(path);
+        let io = |source| SequenceError::Io {
+            path: p.display().to_string(),
+            source,
+        };
+        let len = std::fs::metadata(&p).map_err(io)?.len();
+        if len > MAX_FILE_BYTES {
+            return Err(SequenceError::TooLarge {
+                path: p.display().to_string(),
+                what: "file size in bytes",
+                actual: len,
+                limit: MAX_FILE_BYTES,
+            });
+        }
+        std::fs::read(&p).map_err(io)
+    }
+
+    fn display(&self, path: &str) -> String {
+        self.path(path).display().to_string()
+    }
+}
+
+/// Files held in memory, keyed by relative path.
+#[derive(Debug, Clone, Default)]
+pub struct MemorySource {
+    /// Name shown in messages.
+    pub name: String,
+    files: BTreeMap<String, Vec<u8>>,
+}
+
+impl MemorySource {
+    /// An empty source called `name`.
+    pub fn new(name: impl Into<String>) -> Self {
+        Self {
+            name: name.into(),
+            files: BTreeMap::new(),
+        }
+    }
+
+    /// Adds a file. A common leading folder (the sequence folder's own name)
+    /// is removed later by [`MemorySource::strip_common_root`].
+    pub fn insert(&mut self, path: &str, bytes: Vec<u8>) {
+        let clean: Vec<&str> = path
+            .split(['/', '\\'])
+            .filter(|s| !s.is_empty() && *s != ".")
+            .collect();
+        self.files.insert(clean.join("/"), bytes);
+    }
+
+    /// Number of files.
+    pub fn len(&self) -> usize {
+        self.files.len()
+    }
+
+    /// `true` when there are no files.
+    pub fn is_empty(&self) -> bool {
+        self.files.is_empty()
+    }
+
+    /// When every file sits under one top folder that is not itself part of
+    /// the layout (`myseq/color/...`), drops that folder from every path.
+    pub fn strip_common_root(&mut self) {
+        let known =
+            |s: &str| matches!(s, "color" | "rgb" | "image" | "depth") || s.ends_with(".json");
+        loop {
+            let mut tops = self.files.keys().map(|k| k.split('/').next().unwrap_or(""));
+            let Some(first) = tops.next() else { return };
+            if known(first) || !self.files.keys().all(|k| k.contains('/')) {
+                return;
+            }
+            let first = first.to_string();
+            if !tops.all(|t| t == first) {
+                return;
+            }
+            let prefix = format!("{first}/");
+            self.files = std::mem::take(&mut self.files)
+                .into_iter()
+                .map(|(k, v)| (k[prefix.len()..].to_string(), v))
+                .collect();
+        }
+    }
+}
+
+impl Source for MemorySource {
+    fn list(&self, dir: &str) -> Result<Vec<String>, SequenceError> {
+        let prefix = if dir.is_empty() {
+            String::new()
+        } else {
+            format!("{dir}/")
+        };
+        Ok(self
+            .files
+            .keys()
+            .filter_map(|k| k.strip_prefix(&prefix))
+            .filter(|rest| !rest.contains('/') && !rest.is_empty())
+            .map(str::to_string)
+            .collect())
+    }
+
+    fn is_file(&self, path: &str) -> bool {
+        self.files.contains_key(path)
+    }
+
+    fn is_dir(&self, dir: &str) -> bool {
+        let prefix = format!("{dir}/");
+        self.files.keys().any(|k| k.starts_with(&prefix))
+    }
+
+    fn read(&self, path: &str) -> Result<Vec<u8>, SequenceError> {
+        self.files
+            .get(path)
+            .cloned()
+            .ok_or_else(|| SequenceError::Missing {
+                path: self.display(path),
+                what: "file",
+            })
+    }
+
+    fn display(&self, path: &str) -> String {
+        if self.name.is_empty() {
+            path.to_string()
+        } else {
+            format!("{}/{}", self.name, path)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn memory_source_lists_one_level_and_strips_the_sequence_folder() {
+        let mut m = MemorySource::new("drop");
+        m.insert("seq/color/000001.jpg", vec![1]);
+        m.insert("seq/color/000000.jpg", vec![0]);
+        m.insert("seq/camera_intrinsic.json", vec![]);
+        m.strip_common_root();
+        let mut names = m.list("color").expect("list");
+        names.sort();
+        assert_eq!(names, ["000000.jpg", "000001.jpg"]);
+        assert!(m.is_dir("color") && m.is_file("camera_intrinsic.json"));
+        assert_eq!(m.read("color/000001.jpg").expect("read"), vec![1]);
+    }
+}

@@ -1,0 +1,18 @@
+//! Synthetic RGB-D sequences of a rope seen by a RealSense D435i, with exact
+//! ground truth: a position-based (XPBD-style) rope simulation on a table,
+//! a ray-casting renderer (capsule chain, table, occluder boxes) with a
+//! D435i-like depth noise model, and the named scenarios of the evaluation.
+//!
+//! `no_std` with `alloc`, like the core, so that it also runs in a browser.
+#![no_std]
+#![warn(missing_docs)]
+
+extern crate alloc;
+
+pub mod render;
+pub mod rope;
+pub mod scenario;
+
+pub use render::{RenderSettings, Rendered};
+pub use rope::{Rope, RopeSettings};
+pub use scenario::{Scenario, ScenarioKind, SynthFrame};

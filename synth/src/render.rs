@@ -1,0 +1,450 @@
+//! The renderer: a pinhole camera (D435i colour intrinsics) looking straight
+//! down at the table, ray casting the rope as a chain of capsules, the table
+//! plane and optional occluder boxes; Lambert shading, a braided texture,
+//! table texture, vignetting and colour noise; and depth with the D435i's
+//! behaviour (noise growing with z^2, holes and flying pixels at edges,
+//! random dropouts, millimetre quantisation, 0 where invalid).
+
+use alloc::vec;
+use alloc::vec::Vec;
+
+use upetrack::math::{self, Vec3};
+use upetrack::rng::SplitMix64;
+use upetrack::CameraIntrinsics;
+
+/// Stereo baseline of the D435i, metres.
+pub const D435I_BASELINE: f64 = 0.050;
+
+/// How an image is rendered.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RenderSettings {
+    /// Colour intrinsics (depth is aligned to colour).
+    pub camera: CameraIntrinsics,
+    /// Camera height above the table, metres. Default 0.6.
+    pub camera_height: f64,
+    /// Rope albedo, RGB in [0, 1]. Default a mid blue like TrackDLO's rope.
+    pub rope_color: [f64; 3],
+    /// Table albedo, RGB in [0, 1]. Default off-white.
+    pub table_color: [f64; 3],
+    /// Occluder albedo, RGB in [0, 1]. Default grey.
+    pub occluder_color: [f64; 3],
+    /// Pitch of the braid texture along the rope, metres. Default 8 mm.
+    pub braid_pitch: f64,
+    /// Standard deviation of the colour noise, 8-bit levels. Default 2.5.
+    pub color_noise: f64,
+    /// Subpixel disparity noise of the stereo matcher, pixels. Default 0.08.
+    pub subpixel_noise: f64,
+    /// Multiplier on the depth noise. Default 1.
+    pub depth_noise_multiplier: f64,
+    /// Probability that a pixel on a depth edge has no depth. Default 0.35.
+    pub edge_hole_probability: f64,
+    /// Probability that a pixel on a depth edge is a flying pixel. Default 0.15.
+    pub flying_pixel_probability: f64,
+    /// Probability of a random dropout anywhere. Default 0.002.
+    pub dropout_probability: f64,
+    /// Strength of the vignetting at the image corners, in [0, 1]. Default 0.25.
+    pub vignetting: f64,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        Self {
+            camera: CameraIntrinsics::D435I_640X480,
+            camera_height: 0.6,
+            rope_color: [0.08, 0.22, 0.55],
+            table_color: [0.86, 0.87, 0.85],
+            occluder_color: [0.45, 0.42, 0.38],
+            braid_pitch: 0.008,
+            color_noise: 2.5,
+            subpixel_noise: 0.08,
+            depth_noise_multiplier: 1.0,
+            edge_hole_probability: 0.35,
+            flying_pixel_probability: 0.15,
+            dropout_probability: 0.002,
+            vignetting: 0.25,
+        }
+    }
+}
+
+/// An axis-aligned box in the world frame (table at z = 0, z up).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OccluderBox {
+    /// Minimum corner, metres.
+    pub min: Vec3,
+    /// Maximum corner, metres.
+    pub max: Vec3,
+}
+
+/// A rendered frame.
+#[derive(Debug, Clone)]
+pub struct Rendered {
+    /// RGB8, row-major.
+    pub rgb: Vec<u8>,
+    /// Depth in millimetres, 0 where invalid.
+    pub depth: Vec<u16>,
+}
+
+/// World (table frame) to camera frame for a camera straight above the
+/// origin looking down: x right, y down (world -y), z forward (down).
+pub fn world_to_camera(p: &Vec3, height: f64) -> Vec3 {
+    Vec3::new(p.x, -p.y, height - p.z)
+}
+
+#[derive(Clone, Copy)]
+enum Surface {
+    Table,
+    Rope { s: f64, n: Vec3, axis: Vec3 },
+    Box { n: Vec3 },
+}
+
+/// Ray (origin 0, unit direction `rd`) against the capsule `a`-`b` of radius `r`.
+/// Returns the distance and the parameter along the axis in [0, 1].
+fn ray_capsule(rd: &Vec3, a: &Vec3, b: &Vec3, r: f64) -> Option<(f64, f64)> {
+    let ba = b - a;
+    let oa = -a;
+    let baba = ba.dot(&ba);
+    let bard = ba.dot(rd);
+    let baoa = ba.dot(&oa);
+    let rdoa = rd.dot(&oa);
+    let oaoa = oa.dot(&oa);
+    let qa = baba - bard * bard;
+    if qa > 1e-14 {
+        let qb = baba * rdoa - baoa * bard;
+        let qc = baba * oaoa - baoa * baoa - r * r * baba;
+        let h = qb * qb - qa * qc;
+        if h >= 0.0 {
+            let t = (-qb - math::sqrt(h)) / qa;
+            let y = baoa + t * bard;
+            if y > 0.0 && y < baba && t > 0.0 {
+                return Some((t, y / baba));
+            }
+        }
+    }
+    // End caps (spheres at a and b).
+    let mut best: Option<(f64, f64)> = None;
+    for (c, param) in [(a, 0.0), (b, 1.0)] {
+        let oc = -c;
+        let qb = rd.dot(&oc);
+        let qc = oc.dot(&oc) - r * r;
+        let h = qb * qb - qc;
+        if h > 0.0 {
+            let t = -qb - math::sqrt(h);
+            if t > 0.0 && best.is_none_or(|(bt, _)| t < bt) {
+                best = Some((t, param));
+            }
+        }
+    }
+    best
+}
+
+/// Ray against an axis-aligned box (camera frame); distance and normal.
+fn ray_box(rd: &Vec3, min: &Vec3, max: &Vec3) -> Option<(f64, Vec3)> {
+    let mut t0 = f64::NEG_INFINITY;
+    let mut t1 = f64::INFINITY;
+    let mut normal = Vec3::zeros();
+    for k in 0..3 {
+        if rd[k].abs() < 1e-15 {
+            if 0.0 < min[k] || 0.0 > max[k] {
+                return None;
+            }
+            continue;
+        }
+        let (mut a, mut b) = (min[k] / rd[k], max[k] / rd[k]);
+        let mut sign = -1.0;
+        if a > b {
+            core::mem::swap(&mut a, &mut b);
+            sign = 1.0;
+        }
+        if a > t0 {
+            t0 = a;
+            normal = Vec3::zeros();
+            normal[k] = sign;
+        }
+        t1 = t1.min(b);
+    }
+    (t0 <= t1 && t0 > 0.0).then_some((t0, normal))
+}
+
+/// Smooth value noise in [0, 1] on a lattice of `cell` metres (table texture).
+fn value_noise(x: f64, y: f64, cell: f64, seed: u64) -> f64 {
+    let hash = |i: i64, j: i64| {
+        let mut r = SplitMix64::new(
+            seed ^ (i as u64).wrapping_mul(0x9E37_79B9) ^ (j as u64).wrapping_mul(0x85EB_CA6B),
+        );
+        r.uniform()
+    };
+    let (fx, fy) = (x / cell, y / cell);
+    let (ix, iy) = (math::floor(fx), math::floor(fy));
+    let (tx, ty) = (fx - ix, fy - iy);
+    let (sx, sy) = (tx * tx * (3.0 - 2.0 * tx), ty * ty * (3.0 - 2.0 * ty));
+    let (i, j) = (ix as i64, iy as i64);
+    let a = hash(i, j) + (hash(i + 1, j) - hash(i, j)) * sx;
+    let b = hash(i, j + 1) + (hash(i + 1, j + 1) - hash(i, j + 1)) * sx;
+    a + (b - a) * sy
+}
+
+/// Renders the rope (particles in the world frame, radius `r`) and boxes.
+pub fn render(
+    settings: &RenderSettings,
+    particles: &[Vec3],
+    radius: f64,
+    boxes: &[OccluderBox],
+    rng: &mut SplitMix64,
+) -> Rendered {
+    let cam = &settings.camera;
+    let (w, h) = (cam.width as usize, cam.height as usize);
+    let height = settings.camera_height;
+    let pts: Vec<Vec3> = particles
+        .iter()
+        .map(|p| world_to_camera(p, height))
+        .collect();
+    let mut arc = vec![0.0; pts.len()];
+    for i in 1..pts.len() {
+        arc[i] = arc[i - 1] + math::norm(&(pts[i] - pts[i - 1]));
+    }
+    let ray = |u: usize, v: usize| {
+        let d = Vec3::new(
+            (u as f64 - cam.cx) / cam.fx,
+            (v as f64 - cam.cy) / cam.fy,
+            1.0,
+        );
+        d / math::norm(&d)
+    };
+    // Start with the table everywhere: plane z = height in camera frame.
+    let mut dist = vec![0.0f64; w * h];
+    let mut surf = vec![Surface::Table; w * h];
+    for v in 0..h {
+        for u in 0..w {
+            dist[v * w + u] = height / ray(u, v).z;
+        }
+    }
+    let bbox = |ps: &[Vec3], margin: f64| -> Option<(usize, usize, usize, usize)> {
+        let (mut u0, mut v0, mut u1, mut v1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
+        for p in ps {
+            let q = cam.project(p)?;
+            u0 = u0.min(q.x);
+            v0 = v0.min(q.y);
+            u1 = u1.max(q.x);
+            v1 = v1.max(q.y);
+        }
+        let clampu = |x: f64| x.clamp(0.0, (w - 1) as f64) as usize;
+        let clampv = |x: f64| x.clamp(0.0, (h - 1) as f64) as usize;
+        if u1 + margin < 0.0
+            || v1 + margin < 0.0
+            || u0 - margin > w as f64
+            || v0 - margin > h as f64
+        {
+            return None;
+        }
+        Some((
+            clampu(u0 - margin),
+            clampu(u1 + margin) + 1,
+            clampv(v0 - margin),
+            clampv(v1 + margin) + 1,
+        ))
+    };
+    for i in 0..pts.len().saturating_sub(1) {
+        let (a, b) = (pts[i], pts[i + 1]);
+        let zmin = a.z.min(b.z) - radius;
+        if zmin <= 1e-3 {
+            continue;
+        }
+        let margin = radius * cam.fx.max(cam.fy) / zmin + 2.0;
+        let Some((u0, u1, v0, v1)) = bbox(&[a, b], margin) else {
+            continue;
+        };
+        let axis = (b - a) / math::norm(&(b - a)).max(1e-12);
+        for v in v0..v1.min(h) {
+            for u in u0..u1.min(w) {
+                let rd = ray(u, v);
+                if let Some((t, param)) = ray_capsule(&rd, &a, &b, radius) {
+                    let k = v * w + u;
+                    if t < dist[k] {
+                        let p = rd * t;
+                        let c = a + (b - a) * param;
+                        let n = (p - c) / math::norm(&(p - c)).max(1e-12);
+                        dist[k] = t;
+                        surf[k] = Surface::Rope {
+                            s: arc[i] + param * (arc[i + 1] - arc[i]),
+                            n,
+                            axis,
+                        };
+                    }
+                }
+            }
+        }
+    }
+    for bx in boxes {
+        let corners: Vec<Vec3> = (0..8)
+            .map(|c| {
+                let p = Vec3::new(
+                    if c & 1 == 0 { bx.min.x } else { bx.max.x },
+                    if c & 2 == 0 { bx.min.y } else { bx.max.y },
+                    if c & 4 == 0 { bx.min.z } else { bx.max.z },
+                );
+                world_to_camera(&p, height)
+            })
+            .collect();
+        let (mn, mx) = corners.iter().fold(
+            (Vec3::repeat(f64::MAX), Vec3::repeat(f64::MIN)),
+            |(a, b), p| (a.inf(p), b.sup(p)),
+        );
+        if mn.z <= 1e-3 {
+            continue;
+        }
+        let Some((u0, u1, v0, v1)) = bbox(&corners, 2.0) else {
+            continue;
+        };
+        for v in v0..v1.min(h) {
+            for u in u0..u1.min(w) {
+                let rd = ray(u, v);
+                if let Some((t, n)) = ray_box(&rd, &mn, &mx) {
+                    let k = v * w + u;
+                    if t < dist[k] {
+                        dist[k] = t;
+                        surf[k] = Surface::Box { n };
+                    }
+                }
+            }
+        }
+    }
+
+    // Shading.
+    let light = Vec3::new(-0.3, -0.4, -1.0).normalize(); // towards the light, camera frame
+    let (ambient, diffuse) = (0.35, 0.75);
+    let tex_seed = 0x7AB1E;
+    let diag = math::sqrt(cam.cx * cam.cx + cam.cy * cam.cy).max(1.0);
+    let mut rgb = vec![0u8; w * h * 3];
+    let mut depth_m = vec![0.0f64; w * h];
+    for v in 0..h {
+        for u in 0..w {
+            let k = v * w + u;
+            let rd = ray(u, v);
+            let p = rd * dist[k];
+            depth_m[k] = p.z;
+            let (albedo, lambert, texture) = match surf[k] {
+                Surface::Table => {
+                    let world_x = p.x;
+                    let world_y = -p.y;
+                    let t = 0.94
+                        + 0.06 * value_noise(world_x, world_y, 0.01, tex_seed)
+                        + 0.03 * (value_noise(world_x, world_y, 0.002, tex_seed + 1) - 0.5);
+                    (
+                        settings.table_color,
+                        light.dot(&Vec3::new(0.0, 0.0, -1.0)).max(0.0),
+                        t,
+                    )
+                }
+                Surface::Rope { s, n, axis } => {
+                    // Helical strands: phase along the rope plus angle around it.
+                    let e1 = axis.cross(&Vec3::new(0.0, 0.0, 1.0));
+                    let e1 = if e1.norm() > 1e-9 {
+                        e1.normalize()
+                    } else {
+                        Vec3::new(1.0, 0.0, 0.0)
+                    };
+                    let e2 = axis.cross(&e1);
+                    let theta = libm::atan2(n.dot(&e2), n.dot(&e1));
+                    let phase = core::f64::consts::TAU * s / settings.braid_pitch + 2.0 * theta;
+                    let t = 0.78 + 0.22 * libm::cos(phase);
+                    (settings.rope_color, n.dot(&light).max(0.0), t)
+                }
+                Surface::Box { n } => (settings.occluder_color, n.dot(&light).abs(), 1.0),
+            };
+            let lambert = lambert.min(1.0);
+            let r2 = ((u as f64 - cam.cx).powi(2) + (v as f64 - cam.cy).powi(2)) / (diag * diag);
+            let vignette = 1.0 - settings.vignetting * r2;
+            for c in 0..3 {
+                let value = albedo[c] * (ambient + diffuse * lambert) * texture * vignette * 255.0
+                    + settings.color_noise * rng.normal();
+                rgb[3 * k + c] = value.round().clamp(0.0, 255.0) as u8;
+            }
+        }
+    }
+
+    // Depth: D435i-like noise, edges, dropouts, millimetres.
+    let focal = 0.5 * (cam.fx + cam.fy);
+    let mut depth = vec![0u16; w * h];
+    const EDGE_STEP: f64 = 0.008;
+    for v in 0..h {
+        for u in 0..w {
+            let k = v * w + u;
+            let z = depth_m[k];
+            let mut edge_other = None;
+            for (du, dv) in [(-1i64, 0i64), (1, 0), (0, -1), (0, 1)] {
+                let (nu, nv) = (u as i64 + du, v as i64 + dv);
+                if nu >= 0 && nv >= 0 && (nu as usize) < w && (nv as usize) < h {
+                    let zn = depth_m[nv as usize * w + nu as usize];
+                    if (zn - z).abs() > EDGE_STEP {
+                        edge_other = Some(zn);
+                    }
+                }
+            }
+            let roll = rng.uniform();
+            let mut z_out = z;
+            if let Some(zn) = edge_other {
+                if roll < settings.edge_hole_probability {
+                    continue;
+                }
+                if roll < settings.edge_hole_probability + settings.flying_pixel_probability {
+                    z_out = z + (zn - z) * rng.uniform();
+                }
+            } else if roll < settings.dropout_probability {
+                continue;
+            }
+            let sigma = z_out * z_out * settings.subpixel_noise / (focal * D435I_BASELINE)
+                * settings.depth_noise_multiplier;
+            let mm = ((z_out + sigma * rng.normal()) * 1000.0).round();
+            if mm >= 1.0 && mm <= u16::MAX as f64 {
+                depth[k] = mm as u16;
+            }
+        }
+    }
+    Rendered { rgb, depth }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ray_hits_capsule_body_and_caps() {
+        let a = Vec3::new(-0.1, 0.0, 0.5);
+        let b = Vec3::new(0.1, 0.0, 0.5);
+        let (t, param) = ray_capsule(&Vec3::new(0.0, 0.0, 1.0), &a, &b, 0.01).expect("hit");
+        assert!((t - 0.49).abs() < 1e-12 && (param - 0.5).abs() < 1e-12);
+        let dir = Vec3::new(0.1, 0.0, 0.5).normalize();
+        assert!(ray_capsule(&dir, &a, &b, 0.01).is_some());
+        assert!(ray_capsule(&Vec3::new(0.0, 1.0, 1.0).normalize(), &a, &b, 0.01).is_none());
+    }
+
+    #[test]
+    fn depth_noise_follows_the_d435i_model() {
+        // Flat table at 0.6 m: the spread of depth is z^2 * 0.08 / (615 * 0.05) = 0.94 mm
+        // (plus millimetre quantisation, variance 1/12 mm^2).
+        let mut s = RenderSettings::default();
+        s.camera.width = 64;
+        s.camera.height = 48;
+        s.camera.cx = 32.0;
+        s.camera.cy = 24.0;
+        let mut rng = SplitMix64::new(1);
+        let r = render(&s, &[], 0.0075, &[], &mut rng);
+        let vals: Vec<f64> = r
+            .depth
+            .iter()
+            .filter(|&&d| d > 0)
+            .map(|&d| d as f64)
+            .collect();
+        assert!(vals.len() > 3000);
+        // Remove the slant: off-centre pixels see the table farther only along the ray, z is constant.
+        let mean = vals.iter().sum::<f64>() / vals.len() as f64;
+        let sd = math::sqrt(
+            vals.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / vals.len() as f64,
+        );
+        let expected = math::sqrt(
+            0.6f64.powi(4) * 0.08f64.powi(2) / (615.0f64 * 0.05).powi(2) * 1e6 + 1.0 / 12.0,
+        );
+        assert!((mean - 600.0).abs() < 0.2, "mean {mean}");
+        assert!((sd - expected).abs() < 0.15, "sd {sd} vs {expected}");
+    }
+}

@@ -1,0 +1,430 @@
+//! The named scenarios: a settled rope, grasp paths, occlusion rectangles
+//! (the contract's colour masking) or real occluder boxes, rendered frame
+//! by frame with the ground-truth centre line in the camera frame.
+
+use alloc::string::String;
+use alloc::vec::Vec;
+
+use upetrack::math::Vec3;
+use upetrack::rng::SplitMix64;
+use upetrack::segmentation::rgb_to_hsv;
+use upetrack::{CameraIntrinsics, HsvRange, Rect};
+
+use crate::render::{render, world_to_camera, OccluderBox, RenderSettings};
+use crate::rope::{Rope, RopeSettings};
+
+/// Frames of physics run before recording starts.
+pub const SETTLING_FRAMES: usize = 45;
+/// Most frames one scenario records.
+pub const MAX_FRAMES: usize = 100_000;
+/// Margin added around the projected rope segment that an occlusion hides, pixels.
+const OCCLUSION_MARGIN_PX: f64 = 14.0;
+
+/// Which scenario.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ScenarioKind {
+    /// The paper's scenario I: a static S whose lower bend is hidden after a settling period.
+    StaticS,
+    /// The paper's scenario II: a bend hidden, then one end pulled.
+    DynamicPull,
+    /// A tip hidden while the rope is dragged by its other end.
+    TipDrag,
+    /// TrackDLO's sweep: a rectangle covering the first `percent` % of the rope (10..=50) while it is pulled.
+    OcclusionSweep {
+        /// Share of the rope hidden, percent.
+        percent: u8,
+    },
+    /// One end lifted and swung in 3D while a real box passes in front of the rope.
+    LiftedSwing,
+    /// A fast pull (about 0.3 m/s) without occlusion.
+    FastPull,
+}
+
+impl ScenarioKind {
+    /// Every scenario's command-line name.
+    pub const NAMES: [&'static str; 6] = [
+        "static-s",
+        "dynamic-pull",
+        "tip-drag",
+        "sweep-<K>",
+        "lifted-swing",
+        "fast-pull",
+    ];
+
+    /// Parses a command-line name (`sweep-30` for a 30 % sweep).
+    pub fn parse(name: &str) -> Option<Self> {
+        Some(match name {
+            "static-s" => Self::StaticS,
+            "dynamic-pull" => Self::DynamicPull,
+            "tip-drag" => Self::TipDrag,
+            "lifted-swing" => Self::LiftedSwing,
+            "fast-pull" => Self::FastPull,
+            other => {
+                let k: u8 = other.strip_prefix("sweep-")?.parse().ok()?;
+                if !(10..=50).contains(&k) {
+                    return None;
+                }
+                Self::OcclusionSweep { percent: k }
+            }
+        })
+    }
+
+    /// The command-line name.
+    pub fn name(&self) -> String {
+        match self {
+            Self::StaticS => "static-s".into(),
+            Self::DynamicPull => "dynamic-pull".into(),
+            Self::TipDrag => "tip-drag".into(),
+            Self::OcclusionSweep { percent } => alloc::format!("sweep-{percent}"),
+            Self::LiftedSwing => "lifted-swing".into(),
+            Self::FastPull => "fast-pull".into(),
+        }
+    }
+
+    /// One sentence on what it shows.
+    pub fn description(&self) -> &'static str {
+        match self {
+            Self::StaticS => "static S-shaped rope; from 30 % of the frames on, its lower bend is hidden (paper scenario I)",
+            Self::DynamicPull => "S-shaped rope; its lower bend is hidden from 30 % of the frames on, and from 40 % its nearer end is pulled 12 cm (paper scenario II)",
+            Self::TipDrag => "one tip (15 % of the rope) hidden from 30 % of the frames on while the other end drags the rope 12 cm",
+            Self::OcclusionSweep { .. } => "TrackDLO's protocol: a rectangle hides the first K % of the rope from 30 % of the frames on while the far end is pulled 8 cm",
+            Self::LiftedSwing => "one end lifted 12 cm and swung in a circle; a grey box passes between camera and rope",
+            Self::FastPull => "one end pulled 25 cm in a third of the sequence (about 0.3 m/s at 30 fps), no occlusion",
+        }
+    }
+}
+
+/// An occlusion rectangle over a frame range (inclusive), as in `dlo.json`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SynthOcclusion {
+    /// First frame.
+    pub first: usize,
+    /// Last frame.
+    pub last: usize,
+    /// Rectangle, pixels.
+    pub rect: Rect,
+}
+
+/// One rendered frame with its ground truth.
+#[derive(Debug, Clone)]
+pub struct SynthFrame {
+    /// Frame index.
+    pub index: usize,
+    /// RGB8.
+    pub rgb: Vec<u8>,
+    /// Depth, millimetres.
+    pub depth: Vec<u16>,
+    /// Centre line, ordered, metres, colour camera frame.
+    pub groundtruth: Vec<Vec3>,
+}
+
+/// A grasp moving a particle from its settled position by `offset` between two frames.
+#[derive(Debug, Clone, Copy)]
+struct Pull {
+    particle: usize,
+    start: usize,
+    end: usize,
+    /// World-frame displacement, or the swing radius for a circular path.
+    offset: Vec3,
+    circular: bool,
+}
+
+/// A scenario being recorded.
+pub struct Scenario {
+    /// Which one.
+    pub kind: ScenarioKind,
+    /// Number of frames to record.
+    pub frames: usize,
+    /// Rendering settings.
+    pub render: RenderSettings,
+    /// The rope.
+    pub rope: Rope,
+    /// Occlusion rectangles (the contract's colour masking).
+    pub occlusions: Vec<SynthOcclusion>,
+    rng: SplitMix64,
+    next: usize,
+    pulls: Vec<(Pull, Vec3)>,
+    boxes: Vec<(usize, usize, OccluderBox, Vec3)>,
+}
+
+/// An S laid on the table: one period of a sine across the view.
+fn s_shape() -> Vec<Vec3> {
+    (0..400)
+        .map(|i| {
+            let t = i as f64 / 399.0;
+            Vec3::new(
+                -0.17 + 0.34 * t,
+                0.11 * libm::sin(core::f64::consts::TAU * t),
+                0.0,
+            )
+        })
+        .collect()
+}
+
+/// A gentle arc, for the tip and pull scenarios.
+fn arc_shape() -> Vec<Vec3> {
+    (0..400)
+        .map(|i| {
+            let t = i as f64 / 399.0;
+            Vec3::new(
+                -0.25 + 0.5 * t,
+                -0.12 + 0.25 * libm::sin(core::f64::consts::PI * t),
+                0.0,
+            )
+        })
+        .collect()
+}
+
+fn smoothstep(x: f64) -> f64 {
+    let x = x.clamp(0.0, 1.0);
+    x * x * (3.0 - 2.0 * x)
+}
+
+impl Scenario {
+    /// Sets up `kind` with `frames` frames (at least 1) and a seed; the rope
+    /// is settled before recording starts.
+    pub fn new(kind: ScenarioKind, frames: usize, seed: u64, render: RenderSettings) -> Self {
+        let frames = frames.clamp(1, MAX_FRAMES);
+        let mut rng = SplitMix64::new(seed);
+        let shape = match kind {
+            ScenarioKind::StaticS
+            | ScenarioKind::DynamicPull
+            | ScenarioKind::OcclusionSweep { .. } => s_shape(),
+            _ => arc_shape(),
+        };
+        // Small seeded variation of the layout: a rotation and a shift.
+        let angle = rng.range(-0.08, 0.08);
+        let shift = Vec3::new(rng.range(-0.01, 0.01), rng.range(-0.01, 0.01), 0.0);
+        let (c, s) = (libm::cos(angle), libm::sin(angle));
+        let shape: Vec<Vec3> = shape
+            .iter()
+            .map(|p| Vec3::new(c * p.x - s * p.y, s * p.x + c * p.y, 0.0) + shift)
+            .collect();
+        let mut rope = Rope::laid_along(&shape, RopeSettings::default());
+        for _ in 0..SETTLING_FRAMES {
+            rope.step(1.0 / 30.0);
+        }
+        let n = rope.x.len();
+        let last = n - 1;
+        let at = |f: f64| ((frames as f64 * f) as usize).min(frames - 1);
+        let mut pulls = Vec::new();
+        let mut hidden: Option<(usize, usize)> = None;
+        let mut boxes = Vec::new();
+        let frac = |f: f64| ((last as f64) * f).round() as usize;
+        match kind {
+            ScenarioKind::StaticS => hidden = Some((frac(0.64), frac(0.86))),
+            ScenarioKind::DynamicPull => {
+                hidden = Some((frac(0.64), frac(0.86)));
+                pulls.push(Pull {
+                    particle: last,
+                    start: at(0.4),
+                    end: at(0.9),
+                    offset: Vec3::new(0.06, -0.10, 0.0),
+                    circular: false,
+                });
+            }
+            ScenarioKind::TipDrag => {
+                hidden = Some((0, frac(0.15)));
+                pulls.push(Pull {
+                    particle: last,
+                    start: at(0.35),
+                    end: at(0.9),
+                    offset: Vec3::new(0.04, 0.11, 0.0),
+                    circular: false,
+                });
+            }
+            ScenarioKind::OcclusionSweep { percent } => {
+                hidden = Some((0, frac(percent as f64 / 100.0)));
+                pulls.push(Pull {
+                    particle: last,
+                    start: at(0.4),
+                    end: at(0.9),
+                    offset: Vec3::new(0.03, -0.075, 0.0),
+                    circular: false,
+                });
+            }
+            ScenarioKind::LiftedSwing => {
+                pulls.push(Pull {
+                    particle: last,
+                    start: at(0.1),
+                    end: at(0.95),
+                    offset: Vec3::new(0.05, 0.0, 0.12),
+                    circular: true,
+                });
+                let y0 = rope.x[frac(0.5)].y;
+                boxes.push((
+                    at(0.35),
+                    at(0.8),
+                    OccluderBox {
+                        min: Vec3::new(-0.45, y0 - 0.05, 0.20),
+                        max: Vec3::new(-0.41, y0 + 0.05, 0.22),
+                    },
+                    Vec3::new(0.75, 0.0, 0.0),
+                ));
+            }
+            ScenarioKind::FastPull => {
+                pulls.push(Pull {
+                    particle: last,
+                    start: at(0.3),
+                    end: at(0.63),
+                    offset: Vec3::new(0.10, 0.23, 0.0),
+                    circular: false,
+                });
+            }
+        }
+        let mut occlusions = Vec::new();
+        if let Some((i0, i1)) = hidden {
+            let cam = render.camera;
+            let (mut u0, mut v0, mut u1, mut v1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
+            for p in &rope.x[i0..=i1.min(last)] {
+                if let Some(q) = cam.project(&world_to_camera(p, render.camera_height)) {
+                    u0 = u0.min(q.x);
+                    v0 = v0.min(q.y);
+                    u1 = u1.max(q.x);
+                    v1 = v1.max(q.y);
+                }
+            }
+            let m = OCCLUSION_MARGIN_PX;
+            occlusions.push(SynthOcclusion {
+                first: at(0.3),
+                last: frames - 1,
+                rect: Rect {
+                    x: (u0 - m).floor() as i64,
+                    y: (v0 - m).floor() as i64,
+                    w: (u1 - u0 + 2.0 * m).ceil() as i64,
+                    h: (v1 - v0 + 2.0 * m).ceil() as i64,
+                },
+            });
+        }
+        let pulls = pulls.into_iter().map(|p| (p, rope.x[p.particle])).collect();
+        Self {
+            kind,
+            frames,
+            render,
+            rope,
+            occlusions,
+            rng,
+            next: 0,
+            pulls,
+            boxes,
+        }
+    }
+
+    /// HSV thresholds that fit the rope's colour in OpenCV's convention:
+    /// its hue +-15, saturation from 60 % of its own, any value above 20.
+    pub fn hsv(&self) -> HsvRange {
+        let c = self.render.rope_color;
+        let [h, s, _] = rgb_to_hsv(c.map(|x| (x * 255.0).round().clamp(0.0, 255.0) as u8));
+        let lo = (h as i32 - 15).rem_euclid(180) as u8;
+        let hi = (h as i32 + 15).rem_euclid(180) as u8;
+        HsvRange {
+            lower: [lo, (s as f64 * 0.6) as u8, 20],
+            upper: [hi, 255, 255],
+        }
+    }
+
+    /// The camera.
+    pub fn camera(&self) -> CameraIntrinsics {
+        self.render.camera
+    }
+
+    /// Simulates and renders the next frame, or `None` after the last.
+    pub fn next_frame(&mut self) -> Option<SynthFrame> {
+        if self.next >= self.frames {
+            return None;
+        }
+        let f = self.next;
+        self.next += 1;
+        if f > 0 {
+            for (p, origin) in &self.pulls {
+                if f < p.start {
+                    continue;
+                }
+                let x = smoothstep((f - p.start) as f64 / (p.end - p.start).max(1) as f64);
+                let target = if p.circular {
+                    // Lift first, then swing around a circle in the table plane.
+                    let lift = smoothstep(x * 4.0);
+                    let a = core::f64::consts::TAU * x;
+                    origin
+                        + Vec3::new(
+                            p.offset.x * (libm::cos(a) - 1.0) * lift,
+                            p.offset.x * libm::sin(a) * lift,
+                            p.offset.z * lift,
+                        )
+                } else {
+                    origin + p.offset * x
+                };
+                self.rope.grasp(p.particle, target);
+            }
+            self.rope.step(1.0 / 30.0);
+        }
+        let boxes: Vec<OccluderBox> = self
+            .boxes
+            .iter()
+            .filter(|b| (b.0..=b.1).contains(&f))
+            .map(|&(s, e, bx, travel)| {
+                let x = (f - s) as f64 / (e - s).max(1) as f64;
+                OccluderBox {
+                    min: bx.min + travel * x,
+                    max: bx.max + travel * x,
+                }
+            })
+            .collect();
+        let r = render(
+            &self.render,
+            &self.rope.x,
+            self.rope.radius(),
+            &boxes,
+            &mut self.rng,
+        );
+        let h = self.render.camera_height;
+        Some(SynthFrame {
+            index: f,
+            rgb: r.rgb,
+            depth: r.depth,
+            groundtruth: self.rope.x.iter().map(|p| world_to_camera(p, h)).collect(),
+        })
+    }
+
+    /// Length of the simulated rope now, metres.
+    pub fn rope_length(&self) -> f64 {
+        self.rope.current_length()
+    }
+
+    /// Frames not yet rendered.
+    pub fn remaining(&self) -> usize {
+        self.frames - self.next
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_round_trip() {
+        for k in [
+            ScenarioKind::StaticS,
+            ScenarioKind::DynamicPull,
+            ScenarioKind::TipDrag,
+            ScenarioKind::OcclusionSweep { percent: 30 },
+            ScenarioKind::LiftedSwing,
+            ScenarioKind::FastPull,
+        ] {
+            assert_eq!(ScenarioKind::parse(&k.name()), Some(k));
+        }
+        assert_eq!(ScenarioKind::parse("sweep-60"), None);
+        assert_eq!(ScenarioKind::parse("nope"), None);
+    }
+
+    #[test]
+    fn hsv_range_contains_the_rope_colour_and_not_the_table() {
+        let s = Scenario::new(ScenarioKind::StaticS, 1, 1, RenderSettings::default());
+        let hsv = s.hsv();
+        assert!(hsv.validate().is_ok());
+        let rope = s.render.rope_color.map(|x| (x * 255.0 * 0.8) as u8);
+        assert!(hsv.contains(rgb_to_hsv(rope)));
+        let table = s.render.table_color.map(|x| (x * 255.0) as u8);
+        assert!(!hsv.contains(rgb_to_hsv(table)));
+    }
+}
