@@ -2,6 +2,7 @@
 //! write synthetic scenarios, and benchmark the per-frame cost.
 
 mod bench;
+mod overlay;
 mod synth;
 
 use std::path::{Path, PathBuf};
@@ -18,9 +19,10 @@ upetrack: track a rope in RGB-D sequences (UPETrack)
 
 USAGE:
   upetrack track <sequence> --out <result.json> [--params <params.json>]
-  upetrack eval <sequence>... [--params <params.json>] [--json <out.json>] [--markdown <out.md>]
+  upetrack eval <sequence>... [--params <params.json>] [--json <out.json>] [--markdown <out.md>] [--per-frame <out.csv>]
   upetrack synth <scenario> <dir> [--frames N] [--seed S] [--hd]
   upetrack bench [<sequence>...] [--frames N]
+  upetrack overlay <sequence> <result.json> <frame> <out.png>
   upetrack scenarios
 
 A sequence is a folder in the layout of docs/sequence-format.md.
@@ -184,7 +186,7 @@ fn markdown_table(rows: &[Summary]) -> String {
 }
 
 fn cmd_eval(raw: &[String]) -> Result<(), CliError> {
-    let args = Args::parse(raw, &[], &["params", "json", "markdown"])?;
+    let args = Args::parse(raw, &[], &["params", "json", "markdown", "per-frame"])?;
     if args.positional.is_empty() {
         return Err(CliError(format!(
             "eval takes at least one sequence\n\n{USAGE}"
@@ -205,6 +207,10 @@ fn cmd_eval(raw: &[String]) -> Result<(), CliError> {
             &seq.camera,
             seq.first_occluded_frame(),
         );
+        if let Some(csv) = args.value("per-frame") {
+            let path = if args.positional.len() > 1 { format!("{csv}.{name}.csv") } else { csv.to_string() };
+            write_per_frame(Path::new(&path), &name, &result, &seq)?;
+        }
         if summary.evaluated_frames == 0 {
             eprintln!("{path}: no ground truth; errors are not available");
         }
@@ -221,6 +227,32 @@ fn cmd_eval(raw: &[String]) -> Result<(), CliError> {
     Ok(())
 }
 
+/// Writes one CSV row per frame: error, timings, visible nodes, lost.
+fn write_per_frame(
+    path: &Path,
+    name: &str,
+    result: &upetrack_io::result::TrackResult,
+    seq: &Sequence<FolderSource>,
+) -> Result<(), CliError> {
+    let errors = upetrack_io::eval::frame_errors(result, &seq.groundtruth, &seq.camera);
+    let mut text = String::from("sequence,frame,error_mm,error_px,track_ms,total_ms,visible_nodes,lost\n");
+    for f in &result.frames {
+        let e = errors.iter().find(|e| e.frame == f.frame);
+        text += &format!(
+            "{name},{},{},{},{:.4},{:.4},{},{}\n",
+            f.frame,
+            e.map_or(String::new(), |e| format!("{:.3}", e.mm)),
+            e.map_or(String::new(), |e| format!("{:.3}", e.px)),
+            f.track_ms,
+            f.total_ms,
+            f.visible.iter().filter(|&&v| v).count(),
+            f.lost
+        );
+    }
+    upetrack_io::write::write_file(path, text.as_bytes())?;
+    Ok(())
+}
+
 fn run(raw: &[String]) -> Result<(), CliError> {
     let Some((cmd, rest)) = raw.split_first() else {
         println!("{USAGE}");
@@ -231,6 +263,7 @@ fn run(raw: &[String]) -> Result<(), CliError> {
         "eval" => cmd_eval(rest),
         "synth" => synth::cmd_synth(rest),
         "bench" => bench::cmd_bench(rest),
+        "overlay" => overlay::cmd_overlay(rest),
         "scenarios" => {
             synth::list_scenarios();
             Ok(())
