@@ -208,7 +208,11 @@ fn cmd_eval(raw: &[String]) -> Result<(), CliError> {
             seq.first_occluded_frame(),
         );
         if let Some(csv) = args.value("per-frame") {
-            let path = if args.positional.len() > 1 { format!("{csv}.{name}.csv") } else { csv.to_string() };
+            let path = if args.positional.len() > 1 {
+                format!("{csv}.{name}.csv")
+            } else {
+                csv.to_string()
+            };
             write_per_frame(Path::new(&path), &name, &result, &seq)?;
         }
         if summary.evaluated_frames == 0 {
@@ -235,7 +239,8 @@ fn write_per_frame(
     seq: &Sequence<FolderSource>,
 ) -> Result<(), CliError> {
     let errors = upetrack_io::eval::frame_errors(result, &seq.groundtruth, &seq.camera);
-    let mut text = String::from("sequence,frame,error_mm,error_px,track_ms,total_ms,visible_nodes,lost\n");
+    let mut text =
+        String::from("sequence,frame,error_mm,error_px,track_ms,total_ms,visible_nodes,lost\n");
     for f in &result.frames {
         let e = errors.iter().find(|e| e.frame == f.frame);
         text += &format!(

@@ -30,7 +30,14 @@ fn disc(rgb: &mut [u8], w: i64, h: i64, p: (f64, f64), r: i64, c: [u8; 3]) {
     for dy in -r..=r {
         for dx in -r..=r {
             if dx * dx + dy * dy <= r * r {
-                put(rgb, w, h, p.0.round() as i64 + dx, p.1.round() as i64 + dy, c);
+                put(
+                    rgb,
+                    w,
+                    h,
+                    p.0.round() as i64 + dx,
+                    p.1.round() as i64 + dy,
+                    c,
+                );
             }
         }
     }
@@ -40,13 +47,18 @@ fn disc(rgb: &mut [u8], w: i64, h: i64, p: (f64, f64), r: i64, c: [u8; 3]) {
 pub fn cmd_overlay(raw: &[String]) -> Result<(), CliError> {
     let args = Args::parse(raw, &[], &[])?;
     let [seq_path, result_path, frame, out] = args.positional.as_slice() else {
-        return Err(CliError(format!("overlay takes a sequence, a result, a frame and an output\n\n{USAGE}")));
+        return Err(CliError(format!(
+            "overlay takes a sequence, a result, a frame and an output\n\n{USAGE}"
+        )));
     };
     let seq = open_sequence(seq_path)?;
-    let text = std::fs::read_to_string(result_path).map_err(|e| CliError(format!("{result_path}: {e}")))?;
-    let result: TrackResult =
-        serde_json::from_str(&text).map_err(|e| CliError(format!("{result_path}: invalid result: {e}")))?;
-    let index: usize = frame.parse().map_err(|_| CliError(format!("`{frame}` is not a frame number")))?;
+    let text = std::fs::read_to_string(result_path)
+        .map_err(|e| CliError(format!("{result_path}: {e}")))?;
+    let result: TrackResult = serde_json::from_str(&text)
+        .map_err(|e| CliError(format!("{result_path}: invalid result: {e}")))?;
+    let index: usize = frame
+        .parse()
+        .map_err(|_| CliError(format!("`{frame}` is not a frame number")))?;
     let decoded = seq.frame(index)?;
     let (w, h) = (decoded.width as i64, decoded.height as i64);
     let mut rgb = decoded.color;
@@ -68,8 +80,11 @@ pub fn cmd_overlay(raw: &[String]) -> Result<(), CliError> {
         }
     }
     if let Some(rec) = result.frames.iter().find(|f| f.frame == index) {
-        let pts: Vec<Option<(f64, f64)>> =
-            rec.nodes.iter().map(|p| project(&Vec3::new(p[0], p[1], p[2]))).collect();
+        let pts: Vec<Option<(f64, f64)>> = rec
+            .nodes
+            .iter()
+            .map(|p| project(&Vec3::new(p[0], p[1], p[2])))
+            .collect();
         for s in pts.windows(2) {
             if let (Some(a), Some(b)) = (s[0], s[1]) {
                 line(&mut rgb, w, h, a, b, [255, 255, 255]);
@@ -77,10 +92,20 @@ pub fn cmd_overlay(raw: &[String]) -> Result<(), CliError> {
         }
         for (p, vis) in pts.iter().zip(&rec.visible) {
             if let Some(p) = p {
-                disc(&mut rgb, w, h, *p, 3, if *vis { [230, 30, 30] } else { [255, 210, 0] });
+                disc(
+                    &mut rgb,
+                    w,
+                    h,
+                    *p,
+                    3,
+                    if *vis { [230, 30, 30] } else { [255, 210, 0] },
+                );
             }
         }
     }
-    write_file(Path::new(out), &encode_rgb_png(decoded.width, decoded.height, &rgb)?)?;
+    write_file(
+        Path::new(out),
+        &encode_rgb_png(decoded.width, decoded.height, &rgb)?,
+    )?;
     Ok(())
 }

@@ -154,10 +154,12 @@ impl Grid {
                         continue;
                     }
                     let (n, e, s, wst) = (p[0], p[2], p[4], p[6]);
+                    // Zhang-Suen: first pass P2.P4.P6 = 0 and P4.P6.P8 = 0,
+                    // second pass P2.P4.P8 = 0 and P2.P6.P8 = 0.
                     let ok = if pass == 0 {
-                        !(n && e && s) && !(e && s && wst)
+                        !(e && s && (n || wst))
                     } else {
-                        !(n && e && wst) && !(n && s && wst)
+                        !(n && wst && (e || s))
                     };
                     if ok {
                         remove.push(i);
@@ -335,9 +337,9 @@ fn fill_gaps(values: &mut [Option<f64>]) -> Option<()> {
     for pair in known.windows(2) {
         let (i, j) = (pair[0], pair[1]);
         let (a, b) = (values[i]?, values[j]?);
-        for k in i + 1..j {
+        for (k, v) in values.iter_mut().enumerate().take(j).skip(i + 1) {
             let t = (k - i) as f64 / (j - i) as f64;
-            values[k] = Some(a + (b - a) * t);
+            *v = Some(a + (b - a) * t);
         }
     }
     Some(())

@@ -259,7 +259,8 @@ mod tests {
 
     #[test]
     fn invalid_values_are_rejected_by_name() {
-        let cases: [(&str, fn(&mut Params)); 8] = [
+        type Case = (&'static str, fn(&mut Params));
+        let cases: [Case; 8] = [
             ("node_count", |p| p.node_count = 3),
             ("node_count", |p| p.node_count = 5_000_000),
             ("displacement_decay", |p| p.displacement_decay = f64::NAN),

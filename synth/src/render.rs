@@ -352,12 +352,14 @@ pub fn render(
                 Surface::Box { n } => (settings.occluder_color, n.dot(&light).abs(), 1.0),
             };
             let lambert = lambert.min(1.0);
-            let r2 = ((u as f64 - cam.cx).powi(2) + (v as f64 - cam.cy).powi(2)) / (diag * diag);
+            let r2 = ((u as f64 - cam.cx) * (u as f64 - cam.cx)
+                + (v as f64 - cam.cy) * (v as f64 - cam.cy))
+                / (diag * diag);
             let vignette = 1.0 - settings.vignetting * r2;
             for c in 0..3 {
                 let value = albedo[c] * (ambient + diffuse * lambert) * texture * vignette * 255.0
                     + settings.color_noise * rng.normal();
-                rgb[3 * k + c] = value.round().clamp(0.0, 255.0) as u8;
+                rgb[3 * k + c] = libm::round(value).clamp(0.0, 255.0) as u8;
             }
         }
     }
@@ -394,7 +396,7 @@ pub fn render(
             }
             let sigma = z_out * z_out * settings.subpixel_noise / (focal * D435I_BASELINE)
                 * settings.depth_noise_multiplier;
-            let mm = ((z_out + sigma * rng.normal()) * 1000.0).round();
+            let mm = libm::round((z_out + sigma * rng.normal()) * 1000.0);
             if mm >= 1.0 && mm <= u16::MAX as f64 {
                 depth[k] = mm as u16;
             }

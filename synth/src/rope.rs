@@ -237,7 +237,7 @@ impl Rope {
     fn self_contact(&self, p: &mut [Vec3], w: &[f64]) {
         let n = p.len();
         let min = self.settings.thickness;
-        let skip = (min / self.rest).ceil() as usize + 1;
+        let skip = libm::ceil(min / self.rest) as usize + 1;
         for i in 0..n {
             for j in i + skip..n {
                 let d = p[j] - p[i];
@@ -263,7 +263,11 @@ mod tests {
         let shape: Vec<Vec3> = (0..100)
             .map(|i| {
                 let t = i as f64 / 99.0;
-                Vec3::new(-0.2 + 0.4 * t, 0.1 * libm::sin(6.28 * t), 0.05)
+                Vec3::new(
+                    -0.2 + 0.4 * t,
+                    0.1 * libm::sin(core::f64::consts::TAU * t),
+                    0.05,
+                )
             })
             .collect();
         let mut rope = Rope::laid_along(&shape, RopeSettings::default());

@@ -210,7 +210,7 @@ impl Scenario {
         let mut pulls = Vec::new();
         let mut hidden: Option<(usize, usize)> = None;
         let mut boxes = Vec::new();
-        let frac = |f: f64| ((last as f64) * f).round() as usize;
+        let frac = |f: f64| libm::round((last as f64) * f) as usize;
         match kind {
             ScenarioKind::StaticS => hidden = Some((frac(0.64), frac(0.86))),
             ScenarioKind::DynamicPull => {
@@ -289,10 +289,10 @@ impl Scenario {
                 first: at(0.3),
                 last: frames - 1,
                 rect: Rect {
-                    x: (u0 - m).floor() as i64,
-                    y: (v0 - m).floor() as i64,
-                    w: (u1 - u0 + 2.0 * m).ceil() as i64,
-                    h: (v1 - v0 + 2.0 * m).ceil() as i64,
+                    x: libm::floor(u0 - m) as i64,
+                    y: libm::floor(v0 - m) as i64,
+                    w: libm::ceil(u1 - u0 + 2.0 * m) as i64,
+                    h: libm::ceil(v1 - v0 + 2.0 * m) as i64,
                 },
             });
         }
@@ -314,7 +314,7 @@ impl Scenario {
     /// its hue +-15, saturation from 60 % of its own, any value above 20.
     pub fn hsv(&self) -> HsvRange {
         let c = self.render.rope_color;
-        let [h, s, _] = rgb_to_hsv(c.map(|x| (x * 255.0).round().clamp(0.0, 255.0) as u8));
+        let [h, s, _] = rgb_to_hsv(c.map(|x| libm::round(x * 255.0).clamp(0.0, 255.0) as u8));
         let lo = (h as i32 - 15).rem_euclid(180) as u8;
         let hi = (h as i32 + 15).rem_euclid(180) as u8;
         HsvRange {
