@@ -15,14 +15,7 @@ use crate::{ensure_dir, Args, CliError, USAGE};
 
 /// Prints every scenario with its description.
 pub fn list_scenarios() {
-    for k in [
-        ScenarioKind::StaticS,
-        ScenarioKind::DynamicPull,
-        ScenarioKind::TipDrag,
-        ScenarioKind::OcclusionSweep { percent: 30 },
-        ScenarioKind::LiftedSwing,
-        ScenarioKind::FastPull,
-    ] {
+    for k in ScenarioKind::EXAMPLES {
         let name = match k {
             ScenarioKind::OcclusionSweep { .. } => "sweep-<K> (K in 10..=50)".to_string(),
             _ => k.name(),

@@ -91,44 +91,54 @@ fn written_sequence_loads_and_matches_its_ground_truth() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Frame errors (mm) of a scenario tracked in memory from the simulator (no
+/// JPEG round trip), split into frames before and from the first occlusion.
+fn track_scenario(kind: ScenarioKind, frames: usize, params: Params) -> (Vec<f64>, Vec<f64>) {
+    let mut s = Scenario::new(kind, frames, 4, RenderSettings::default());
+    let mut tracker = Tracker::new(params, s.camera(), s.hsv()).expect("tracker");
+    let occlusions = s.occlusions.clone();
+    let first_occluded = occlusions.first().map(|o| o.first);
+    let (mut clear, mut occluded) = (Vec::new(), Vec::new());
+    while let Some(f) = s.next_frame() {
+        let frame = Frame::new(640, 480, &f.rgb, &f.depth, 0.001).expect("frame");
+        let rects: Vec<_> = occlusions
+            .iter()
+            .filter(|o| (o.first..=o.last).contains(&f.index))
+            .map(|o| o.rect)
+            .collect();
+        let out = tracker.process(&frame, &rects).expect("process");
+        assert!(
+            !out.is_lost(),
+            "{kind:?} frame {} lost: {:?}",
+            f.index,
+            out.status
+        );
+        let e = upetrack::metrics::frame_error(&out.nodes, &f.groundtruth).expect("error") * 1000.0;
+        if first_occluded.is_some_and(|o| f.index >= o) {
+            occluded.push(e);
+        } else {
+            clear.push(e);
+        }
+    }
+    (clear, occluded)
+}
+
+fn mean(v: &[f64]) -> f64 {
+    v.iter().sum::<f64>() / v.len().max(1) as f64
+}
+
+fn max(v: &[f64]) -> f64 {
+    v.iter().copied().fold(0.0, f64::max)
+}
+
 #[test]
 fn tracker_follows_unoccluded_fast_pull_and_stays_bounded_under_occlusion() {
-    // Tracked in memory from the simulator (no JPEG round trip).
-    for (kind, frames) in [
-        (ScenarioKind::FastPull, 60),
-        (ScenarioKind::StaticS, 60),
-        (ScenarioKind::DynamicPull, 60),
+    for kind in [
+        ScenarioKind::FastPull,
+        ScenarioKind::StaticS,
+        ScenarioKind::DynamicPull,
     ] {
-        let mut s = Scenario::new(kind, frames, 4, RenderSettings::default());
-        let mut tracker = Tracker::new(Params::default(), s.camera(), s.hsv()).expect("tracker");
-        let occlusions = s.occlusions.clone();
-        let first_occluded = occlusions.first().map(|o| o.first);
-        let mut clear = Vec::new();
-        let mut occluded = Vec::new();
-        while let Some(f) = s.next_frame() {
-            let frame = Frame::new(640, 480, &f.rgb, &f.depth, 0.001).expect("frame");
-            let rects: Vec<_> = occlusions
-                .iter()
-                .filter(|o| (o.first..=o.last).contains(&f.index))
-                .map(|o| o.rect)
-                .collect();
-            let out = tracker.process(&frame, &rects).expect("process");
-            assert!(
-                !out.is_lost(),
-                "{kind:?} frame {} lost: {:?}",
-                f.index,
-                out.status
-            );
-            let e =
-                upetrack::metrics::frame_error(&out.nodes, &f.groundtruth).expect("error") * 1000.0;
-            if first_occluded.is_some_and(|o| f.index >= o) {
-                occluded.push(e);
-            } else {
-                clear.push(e);
-            }
-        }
-        let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
-        let max = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
+        let (clear, occluded) = track_scenario(kind, 60, Params::default());
         eprintln!(
             "{kind:?}: clear mean {:.2} max {:.2} mm; occluded mean {:.2} max {:.2} mm",
             mean(&clear),
@@ -320,32 +330,12 @@ fn tracker_never_panics_on_degenerate_frames() {
 #[test]
 fn occluded_bend_is_kept_with_a_10mm_visibility_radius() {
     for kind in [ScenarioKind::StaticS, ScenarioKind::DynamicPull] {
-        let mut s = Scenario::new(kind, 60, 4, RenderSettings::default());
         let params = Params {
             visibility_radius: 0.010,
             ..Params::default()
         };
-        let mut tracker = Tracker::new(params, s.camera(), s.hsv()).expect("tracker");
-        let occlusions = s.occlusions.clone();
-        let first = occlusions[0].first;
-        let mut errors = Vec::new();
-        while let Some(f) = s.next_frame() {
-            let frame = Frame::new(640, 480, &f.rgb, &f.depth, 0.001).expect("frame");
-            let rects: Vec<_> = occlusions
-                .iter()
-                .filter(|o| (o.first..=o.last).contains(&f.index))
-                .map(|o| o.rect)
-                .collect();
-            let out = tracker.process(&frame, &rects).expect("process");
-            if f.index >= first {
-                errors.push(
-                    upetrack::metrics::frame_error(&out.nodes, &f.groundtruth).expect("error")
-                        * 1000.0,
-                );
-            }
-        }
-        let mean = errors.iter().sum::<f64>() / errors.len() as f64;
-        let max = errors.iter().copied().fold(0.0, f64::max);
+        let (_, errors) = track_scenario(kind, 60, params);
+        let (mean, max) = (mean(&errors), max(&errors));
         eprintln!("{kind:?} r_vis 10 mm: occluded mean {mean:.2} max {max:.2} mm");
         assert!(mean < 4.0, "{kind:?}: occluded mean {mean:.2} mm");
         assert!(max < 20.0, "{kind:?}: occluded max {max:.2} mm");

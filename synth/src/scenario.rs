@@ -41,6 +41,16 @@ pub enum ScenarioKind {
 }
 
 impl ScenarioKind {
+    /// One of each scenario (the sweep at 30 %).
+    pub const EXAMPLES: [Self; 6] = [
+        Self::StaticS,
+        Self::DynamicPull,
+        Self::TipDrag,
+        Self::OcclusionSweep { percent: 30 },
+        Self::LiftedSwing,
+        Self::FastPull,
+    ];
+
     /// Every scenario's command-line name.
     pub const NAMES: [&'static str; 6] = [
         "static-s",
@@ -403,14 +413,7 @@ mod tests {
 
     #[test]
     fn names_round_trip() {
-        for k in [
-            ScenarioKind::StaticS,
-            ScenarioKind::DynamicPull,
-            ScenarioKind::TipDrag,
-            ScenarioKind::OcclusionSweep { percent: 30 },
-            ScenarioKind::LiftedSwing,
-            ScenarioKind::FastPull,
-        ] {
+        for k in ScenarioKind::EXAMPLES {
             assert_eq!(ScenarioKind::parse(&k.name()), Some(k));
         }
         assert_eq!(ScenarioKind::parse("sweep-60"), None);
