@@ -1,6 +1,7 @@
 //! The point cloud of one frame: masked pixels with valid depth, deprojected,
 //! downsampled on a voxel grid, and moved from the rope's surface to its axis.
 
+use alloc::vec;
 use alloc::vec::Vec;
 
 use crate::camera::CameraIntrinsics;
@@ -52,9 +53,11 @@ pub fn deproject_mask(
 ) -> Vec<Vec3> {
     let width = frame.width as usize;
     let mut points = Vec::new();
-    for (i, _) in mask.data.iter().enumerate().filter(|(_, &m)| m) {
-        if let Some(z) = depth_at(frame, i, settings) {
-            points.push(camera.deproject((i % width) as f64, (i / width) as f64, z));
+    for (v, row) in mask.data.chunks_exact(width).enumerate() {
+        for (u, _) in row.iter().enumerate().filter(|(_, &m)| m) {
+            if let Some(z) = depth_at(frame, v * width + u, settings) {
+                points.push(camera.deproject(u as f64, v as f64, z));
+            }
         }
     }
     points
@@ -67,35 +70,43 @@ pub fn voxel_downsample(points: &[Vec3], leaf: f64) -> Vec<Vec3> {
     if !(leaf > 0.0 && leaf.is_finite()) {
         return points.iter().copied().filter(math::is_finite).collect();
     }
-    let mut keyed: Vec<(u64, u32)> = Vec::with_capacity(points.len());
-    for (i, p) in points.iter().enumerate() {
+    // Open addressing: (key, sum, count) slots, at most half full.
+    const EMPTY: u64 = u64::MAX;
+    let size = (points.len() * 2).next_power_of_two().max(16);
+    let shift = 64 - size.trailing_zeros();
+    let mut keys = vec![EMPTY; size];
+    let mut sums = vec![(Vec3::zeros(), 0u32); size];
+    let inv = 1.0 / leaf;
+    for p in points {
         if !math::is_finite(p) {
             continue;
         }
-        let idx = [p.x, p.y, p.z].map(|c| math::floor(c / leaf) as i64);
+        let idx = [p.x, p.y, p.z].map(|c| math::floor(c * inv) as i64);
         if idx.iter().any(|k| k.abs() >= MAX_VOXEL_INDEX) {
             continue;
         }
         let key = idx
             .iter()
             .fold(0u64, |acc, &k| (acc << 21) | (k + MAX_VOXEL_INDEX) as u64);
-        keyed.push((key, i as u32));
-    }
-    keyed.sort_unstable();
-    let mut out = Vec::new();
-    let mut start = 0;
-    while start < keyed.len() {
-        let key = keyed[start].0;
-        let mut end = start;
-        let mut sum = Vec3::zeros();
-        while end < keyed.len() && keyed[end].0 == key {
-            sum += points[keyed[end].1 as usize];
-            end += 1;
+        let mut slot = (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> shift) as usize;
+        while keys[slot] != EMPTY && keys[slot] != key {
+            slot = (slot + 1) & (size - 1);
         }
-        out.push(sum / (end - start) as f64);
-        start = end;
+        keys[slot] = key;
+        sums[slot].0 += p;
+        sums[slot].1 += 1;
     }
-    out
+    let mut occupied: Vec<(u64, usize)> = keys
+        .iter()
+        .enumerate()
+        .filter(|(_, &k)| k != EMPTY)
+        .map(|(i, &k)| (k, i))
+        .collect();
+    occupied.sort_unstable();
+    occupied
+        .into_iter()
+        .map(|(_, i)| sums[i].0 / sums[i].1 as f64)
+        .collect()
 }
 
 /// Moves each point `offset` metres farther along its viewing ray. A camera
@@ -138,7 +149,6 @@ pub fn build_cloud(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use alloc::vec;
 
     #[test]
     fn voxel_downsample_averages_points_in_one_cube() {

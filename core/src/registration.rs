@@ -11,9 +11,14 @@ use crate::math::{self, Vec3};
 /// Dimension of the points (`D` in the paper).
 const DIM: f64 = 3.0;
 
-/// Beyond this many `2 sigma^2`, a Gaussian term is taken as zero
-/// (`exp(-50)` is below 2e-22, far under any outlier term).
-const EXPONENT_CUTOFF: f64 = 50.0;
+/// Beyond this many `2 sigma^2`, a Gaussian term is taken as zero:
+/// `exp(-20)` is 2e-9 of the term of a node at the point itself, below what
+/// changes a responsibility in its eighth digit.
+const EXPONENT_CUTOFF: f64 = 20.0;
+
+/// Candidate lists are kept while no node has moved more than this fraction
+/// of the cutoff's reach since they were built.
+const CANDIDATE_MARGIN_FRACTION: f64 = 0.25;
 
 /// A node whose total responsibility is below this keeps its position.
 const MIN_RESPONSIBILITY: f64 = 1e-9;
@@ -47,15 +52,19 @@ pub struct EmReport {
 /// square of the mean node spacing (a larger start would let unregularised
 /// nodes collapse onto the cloud's centroid).
 pub fn initial_variance(cloud: &[Vec3], nodes: &[Vec3], active: &[bool], min_variance: f64) -> f64 {
+    let active_nodes: Vec<Vec3> = nodes
+        .iter()
+        .zip(active)
+        .filter(|(_, &a)| a)
+        .map(|(y, _)| *y)
+        .collect();
     let mut sum = 0.0;
     let mut n = 0usize;
     for x in cloud {
-        let d2 = nodes
-            .iter()
-            .zip(active)
-            .filter(|(_, &a)| a)
-            .map(|(y, _)| (x - y).norm_squared())
-            .fold(f64::INFINITY, f64::min);
+        let mut d2 = f64::INFINITY;
+        for y in &active_nodes {
+            d2 = d2.min((x - y).norm_squared());
+        }
         if d2.is_finite() {
             sum += d2;
             n += 1;
@@ -105,7 +114,11 @@ pub fn register(
     let mut p1 = vec![0.0; k];
     let mut px = vec![Vec3::zeros(); k];
     let mut pxx = vec![0.0; k];
-    let mut g = vec![0.0; k];
+    let mut near: Vec<(usize, f64)> = Vec::with_capacity(k);
+    let mut anchor: Vec<Vec3> = Vec::with_capacity(k);
+    let mut offsets: Vec<u32> = Vec::with_capacity(cloud.len() + 1);
+    let mut candidates: Vec<u16> = Vec::new();
+    let (mut rebuild, mut built_variance, mut margin) = (true, 0.0, 0.0);
     let mut iterations = 0;
     let mut converged = false;
 
@@ -114,32 +127,62 @@ pub fn register(
         p1.fill(0.0);
         px.fill(Vec3::zeros());
         pxx.fill(0.0);
-        let two_var = 2.0 * variance;
+        let inv_two_var = 0.5 / variance;
         let mu = libm::pow(core::f64::consts::TAU * variance, DIM / 2.0) * w * k as f64
             / ((1.0 - w) * n);
-
-        for x in cloud {
-            let mut denom = mu;
-            for (j, &m) in idx.iter().enumerate() {
-                let e = (x - nodes[m]).norm_squared() / two_var;
-                g[j] = if e < EXPONENT_CUTOFF {
-                    math::exp(-e)
-                } else {
-                    0.0
-                };
-                denom += g[j];
+        debug_assert!(k <= u16::MAX as usize);
+        // Candidate nodes per point: those within the cutoff's reach plus a
+        // margin when the lists were built. A node left out was farther than
+        // reach + margin then, has moved less than the margin since, and the
+        // reach has not grown, so its term would be cut off anyway.
+        let reach = math::sqrt(2.0 * variance * EXPONENT_CUTOFF);
+        let moved = anchor
+            .iter()
+            .zip(&idx)
+            .map(|(a, &m)| (nodes[m] - a).norm_squared())
+            .fold(0.0, f64::max);
+        if rebuild || variance > built_variance || moved > margin * margin {
+            built_variance = variance;
+            margin = CANDIDATE_MARGIN_FRACTION * reach;
+            anchor.clear();
+            anchor.extend(idx.iter().map(|&m| nodes[m]));
+            let r2 = (reach + margin) * (reach + margin);
+            offsets.clear();
+            candidates.clear();
+            for x in cloud {
+                offsets.push(candidates.len() as u32);
+                for (j, y) in anchor.iter().enumerate() {
+                    if (x - y).norm_squared() < r2 {
+                        candidates.push(j as u16);
+                    }
+                }
             }
-            if !(denom > 0.0) {
+            offsets.push(candidates.len() as u32);
+            rebuild = false;
+        }
+
+        for (i, x) in cloud.iter().enumerate() {
+            let mut denom = mu;
+            near.clear();
+            for &j in &candidates[offsets[i] as usize..offsets[i + 1] as usize] {
+                let j = j as usize;
+                let ej = (x - nodes[idx[j]]).norm_squared() * inv_two_var;
+                if ej < EXPONENT_CUTOFF {
+                    let gj = math::exp_neg(ej);
+                    denom += gj;
+                    near.push((j, gj));
+                }
+            }
+            if near.is_empty() || !(denom > 0.0) {
                 continue;
             }
             let x2 = x.norm_squared();
-            for j in 0..k {
-                if g[j] > 0.0 {
-                    let p = g[j] / denom;
-                    p1[j] += p;
-                    px[j] += x * p;
-                    pxx[j] += p * x2;
-                }
+            let inv_denom = 1.0 / denom;
+            for &(j, gj) in &near {
+                let p = gj * inv_denom;
+                p1[j] += p;
+                px[j] += x * p;
+                pxx[j] += p * x2;
             }
         }
 

@@ -189,15 +189,9 @@ const fn hue_divisors() -> [i32; 256] {
 static SDIV: [i32; 256] = saturation_divisors();
 static HDIV: [i32; 256] = hue_divisors();
 
-/// RGB to HSV as OpenCV's `cvtColor(..., COLOR_RGB2HSV)` does for 8-bit
-/// images: H in 0..=179, S and V in 0..=255 (fixed-point, same rounding).
+/// OpenCV's 8-bit hue from the channels, `v = max` and `diff = max - min`.
 #[inline]
-pub fn rgb_to_hsv(rgb: [u8; 3]) -> [u8; 3] {
-    let (r, g, b) = (rgb[0] as i32, rgb[1] as i32, rgb[2] as i32);
-    let v = r.max(g).max(b);
-    let min = r.min(g).min(b);
-    let diff = v - min;
-    let s = (diff * SDIV[v as usize] + (1 << 11)) >> 12;
+fn hue(r: i32, g: i32, b: i32, v: i32, diff: i32) -> i32 {
     let h_raw = if diff == 0 {
         0
     } else if v == r {
@@ -214,15 +208,52 @@ pub fn rgb_to_hsv(rgb: [u8; 3]) -> [u8; 3] {
     if h >= 180 {
         h -= 180;
     }
-    [h as u8, s as u8, v as u8]
+    h
+}
+
+/// OpenCV's 8-bit saturation from `v = max` and `diff = max - min`.
+#[inline]
+fn saturation(v: i32, diff: i32) -> i32 {
+    (diff * SDIV[v as usize] + (1 << 11)) >> 12
+}
+
+/// RGB to HSV as OpenCV's `cvtColor(..., COLOR_RGB2HSV)` does for 8-bit
+/// images: H in 0..=179, S and V in 0..=255 (fixed-point, same rounding).
+#[inline]
+pub fn rgb_to_hsv(rgb: [u8; 3]) -> [u8; 3] {
+    let (r, g, b) = (rgb[0] as i32, rgb[1] as i32, rgb[2] as i32);
+    let v = r.max(g).max(b);
+    let diff = v - r.min(g).min(b);
+    [
+        hue(r, g, b, v, diff) as u8,
+        saturation(v, diff) as u8,
+        v as u8,
+    ]
 }
 
 /// Segments `frame` with `range` after setting the colour pixels inside each
-/// of `occlusions` to black (depth is left as it is).
+/// of `occlusions` to black (depth is left as it is). Value and saturation
+/// are tested first, so hue is computed only for candidate pixels.
 pub fn segment(frame: &Frame<'_>, range: &HsvRange, occlusions: &[Rect]) -> Mask {
     let mut mask = Mask::new(frame.width, frame.height);
-    for (i, px) in frame.color.chunks_exact(3).enumerate() {
-        mask.data[i] = range.contains(rgb_to_hsv([px[0], px[1], px[2]]));
+    let mut hue_ok = [false; 256];
+    for (h, ok) in hue_ok.iter_mut().enumerate().take(HUE_MAX as usize + 1) {
+        *ok = range.contains([h as u8, range.lower[1], range.lower[2]]);
+    }
+    let (v_lo, v_hi) = (range.lower[2] as i32, range.upper[2] as i32);
+    let (s_lo, s_hi) = (range.lower[1] as i32, range.upper[1] as i32);
+    for (px, m) in frame.color.chunks_exact(3).zip(mask.data.iter_mut()) {
+        let (r, g, b) = (px[0] as i32, px[1] as i32, px[2] as i32);
+        let v = r.max(g).max(b);
+        if v < v_lo || v > v_hi {
+            continue;
+        }
+        let diff = v - r.min(g).min(b);
+        let s = saturation(v, diff);
+        if s < s_lo || s > s_hi {
+            continue;
+        }
+        *m = hue_ok[hue(r, g, b, v, diff) as usize];
     }
     let black_in_range = range.contains(rgb_to_hsv([0, 0, 0]));
     let width = frame.width as usize;
@@ -254,6 +285,43 @@ mod tests {
         assert_eq!(rgb_to_hsv([20, 60, 120]), [108, 213, 120]);
         // Magenta wraps: v = r = b; OpenCV takes the r branch: h = 60 (g - b)/diff = -60 deg -> 150.
         assert_eq!(rgb_to_hsv([255, 0, 255]), [150, 255, 255]);
+    }
+
+    /// The fast path (value and saturation first, hue table) agrees with
+    /// `rgb_to_hsv` + `contains` on every colour of a coarse RGB grid.
+    #[test]
+    fn segment_agrees_with_the_plain_conversion() {
+        let mut color = Vec::new();
+        for r in (0..256).step_by(5) {
+            for g in (0..256).step_by(5) {
+                for b in (0..256).step_by(5) {
+                    color.extend_from_slice(&[r as u8, g as u8, b as u8]);
+                }
+            }
+        }
+        let n = color.len() / 3; // 52^3 = 2704 x 52
+        let depth = alloc::vec![0u16; n];
+        let f = Frame::new(2704, 52, &color, &depth, 0.001).expect("frame");
+        for range in [
+            HsvRange::default(),
+            HsvRange {
+                lower: [170, 50, 40],
+                upper: [8, 230, 250],
+            },
+            HsvRange {
+                lower: [0, 0, 0],
+                upper: [179, 255, 255],
+            },
+        ] {
+            let m = segment(&f, &range, &[]);
+            for (i, px) in color.chunks_exact(3).enumerate() {
+                assert_eq!(
+                    m.data[i],
+                    range.contains(rgb_to_hsv([px[0], px[1], px[2]])),
+                    "{px:?}"
+                );
+            }
+        }
     }
 
     #[test]

@@ -9,10 +9,10 @@ use crate::camera::{CameraError, CameraIntrinsics};
 use crate::frame::{Frame, FrameError};
 use crate::initialisation::{initialise, InitError};
 use crate::math::{self, Vec3};
-use crate::occlusion::estimate_hidden;
+use crate::occlusion::{estimate_hidden, UpeReport};
 use crate::params::{Params, ParamsError};
 use crate::point_cloud::build_cloud;
-use crate::registration::register;
+use crate::registration::{register, EmReport};
 use crate::resampling::{polyline_length, resample_uniform};
 use crate::segmentation::{segment, HsvRange, Mask, Rect, SegmentationError};
 use crate::visibility::visible_nodes;
@@ -76,6 +76,10 @@ pub struct FrameOutput {
     pub visible: Vec<bool>,
     /// How the nodes were obtained.
     pub status: FrameStatus,
+    /// What the registration did (tracked frames only).
+    pub em: Option<EmReport>,
+    /// How hidden nodes were placed (tracked frames only).
+    pub upe: Option<UpeReport>,
 }
 
 impl FrameOutput {
@@ -226,8 +230,8 @@ impl Tracker {
             };
         }
         let mut nodes = prev.clone();
-        register(&obs.cloud, &mut nodes, &visible, &p.em());
-        estimate_hidden(&mut nodes, &visible, &prev, &p.upe());
+        let em = register(&obs.cloud, &mut nodes, &visible, &p.em());
+        let upe = estimate_hidden(&mut nodes, &visible, &prev, &p.upe());
         let mut nodes = resample_uniform(&nodes, p.node_count);
         if nodes.len() != p.node_count || !nodes.iter().all(math::is_finite) {
             // Cannot happen with finite inputs; keep the last good state if it does.
@@ -241,6 +245,8 @@ impl Tracker {
             nodes,
             visible,
             status: FrameStatus::Tracked,
+            em: Some(em),
+            upe: Some(upe),
         }
     }
 
@@ -286,6 +292,8 @@ impl Tracker {
             nodes: init.nodes,
             visible,
             status: FrameStatus::Initialised,
+            em: None,
+            upe: None,
         })
     }
 
@@ -295,6 +303,8 @@ impl Tracker {
             visible: vec![false; nodes.len()],
             nodes,
             status: FrameStatus::Lost(reason),
+            em: None,
+            upe: None,
         }
     }
 
