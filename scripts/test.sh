@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
-# Every check the project runs: formatting, lints, docs, all tests, and the
-# core built without std (thumbv7em) and for WebAssembly.
+# Every check the project runs: formatting, lints, docs, all Rust tests, the
+# core built without std (thumbv7em) and for WebAssembly, and the browser
+# tests of the demo page. Installs what it needs (targets, wasm-bindgen-cli,
+# Chromium, playwright-core) when missing.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -20,3 +22,12 @@ echo "== core and synth for wasm32-unknown-unknown"
 cargo build -p upetrack-core -p upetrack-synth --no-default-features --target wasm32-unknown-unknown --quiet
 echo "== tests"
 cargo test --workspace
+
+echo "== web page build"
+./scripts/build-web.sh
+cargo build --release -p upetrack-cli --quiet
+echo "== browser tests (headless Chromium)"
+if ! command -v chromium >/dev/null 2>&1; then
+  apt-get update -qq && apt-get install -y -qq --no-install-recommends chromium >/dev/null
+fi
+(cd tests/browser && npm ci --no-audit --no-fund --silent && node run.mjs)

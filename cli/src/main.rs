@@ -12,7 +12,7 @@ use std::time::Instant;
 use upetrack::Params;
 use upetrack_io::eval::{summarise, Summary};
 use upetrack_io::run::track_sequence;
-use upetrack_io::{FolderSource, Sequence, SequenceError};
+use upetrack_io::{Sequence, SequenceError};
 
 const USAGE: &str = "\
 upetrack: track a rope in RGB-D sequences (UPETrack)
@@ -25,7 +25,7 @@ USAGE:
   upetrack overlay <sequence> <result.json> <frame> <out.png>
   upetrack scenarios
 
-A sequence is a folder in the layout of docs/sequence-format.md.
+A sequence is a folder in the layout of docs/sequence-format.md, or a .zip of one.
 Scenarios: static-s, dynamic-pull, tip-drag, sweep-10..sweep-50, lifted-swing, fast-pull.";
 
 /// A command-line error with its message.
@@ -106,17 +106,11 @@ fn load_params(path: Option<&str>) -> Result<Params, CliError> {
     Ok(params)
 }
 
-fn open_sequence(path: &str) -> Result<Sequence<FolderSource>, CliError> {
-    let p = Path::new(path);
-    if !p.exists() {
-        return Err(CliError(format!("{path}: no such sequence folder")));
-    }
-    if !p.is_dir() {
-        return Err(CliError(format!(
-            "{path}: not a folder (a sequence is a folder with camera_intrinsic.json, color/ and depth/)"
-        )));
-    }
-    Ok(Sequence::open(FolderSource::new(p))?)
+/// A sequence from a folder or a .zip.
+pub type AnySequence = Sequence<Box<dyn upetrack_io::Source>>;
+
+fn open_sequence(path: &str) -> Result<AnySequence, CliError> {
+    Ok(Sequence::open(upetrack_io::source::open_path(Path::new(path))?)?)
 }
 
 fn now_ms_since(start: Instant) -> impl FnMut() -> f64 {
@@ -236,7 +230,7 @@ fn write_per_frame(
     path: &Path,
     name: &str,
     result: &upetrack_io::result::TrackResult,
-    seq: &Sequence<FolderSource>,
+    seq: &AnySequence,
 ) -> Result<(), CliError> {
     let errors = upetrack_io::eval::frame_errors(result, &seq.groundtruth, &seq.camera);
     let mut text =

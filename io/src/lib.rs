@@ -3,6 +3,7 @@
 //! depth images, writing them, the result JSON, and evaluation statistics.
 #![warn(missing_docs)]
 
+pub mod archive;
 pub mod decode;
 pub mod error;
 pub mod eval;

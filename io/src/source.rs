@@ -217,3 +217,54 @@ mod tests {
         assert_eq!(m.read("color/000001.jpg").expect("read"), vec![1]);
     }
 }
+
+impl Source for Box<dyn Source> {
+    fn list(&self, dir: &str) -> Result<Vec<String>, SequenceError> {
+        (**self).list(dir)
+    }
+    fn is_file(&self, path: &str) -> bool {
+        (**self).is_file(path)
+    }
+    fn is_dir(&self, dir: &str) -> bool {
+        (**self).is_dir(dir)
+    }
+    fn read(&self, path: &str) -> Result<Vec<u8>, SequenceError> {
+        (**self).read(path)
+    }
+    fn display(&self, path: &str) -> String {
+        (**self).display(path)
+    }
+}
+
+/// Opens a sequence folder, or a .zip of one, as a source.
+pub fn open_path(path: &std::path::Path) -> Result<Box<dyn Source>, SequenceError> {
+    let shown = path.display().to_string();
+    if path.is_dir() {
+        return Ok(Box::new(FolderSource::new(path)));
+    }
+    if !path.exists() {
+        return Err(SequenceError::Missing {
+            path: shown,
+            what: "sequence folder or .zip",
+        });
+    }
+    let len = std::fs::metadata(path)
+        .map_err(|source| SequenceError::Io { path: shown.clone(), source })?
+        .len();
+    if len > crate::archive::MAX_ARCHIVE_BYTES {
+        return Err(SequenceError::TooLarge {
+            path: shown,
+            what: "archive size in bytes",
+            actual: len,
+            limit: crate::archive::MAX_ARCHIVE_BYTES,
+        });
+    }
+    let bytes = std::fs::read(path).map_err(|source| SequenceError::Io { path: shown.clone(), source })?;
+    if !crate::archive::is_zip(&bytes) {
+        return Err(SequenceError::invalid(
+            &shown,
+            "not a sequence folder or a .zip (a sequence has camera_intrinsic.json, color/ and depth/)",
+        ));
+    }
+    Ok(Box::new(crate::archive::unpack_zip(&bytes, &shown)?))
+}

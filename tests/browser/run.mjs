@@ -1,0 +1,185 @@
+// Browser tests of the demo page in headless Chromium (Debian's, driven by
+// playwright-core). Serves the repository on loopback, runs each check,
+// saves screenshots to tests/browser/artifacts/, prints "N passed, N failed".
+import { chromium } from 'playwright-core';
+import http from 'node:http';
+import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
+import { execFileSync } from 'node:child_process';
+import { fileURLToPath } from 'node:url';
+
+const here = path.dirname(fileURLToPath(import.meta.url));
+const root = path.resolve(here, '../..');
+const artifacts = path.join(here, 'artifacts');
+fs.mkdirSync(artifacts, { recursive: true });
+const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'upetrack-browser-'));
+
+const TYPES = { '.html': 'text/html', '.js': 'text/javascript', '.mjs': 'text/javascript', '.css': 'text/css',
+  '.wasm': 'application/wasm', '.json': 'application/json', '.png': 'image/png', '.jpg': 'image/jpeg' };
+const server = http.createServer((req, res) => {
+  const url = new URL(req.url, 'http://x');
+  const file = path.join(root, decodeURIComponent(url.pathname));
+  if (!file.startsWith(root) || !fs.existsSync(file) || fs.statSync(file).isDirectory()) {
+    const index = path.join(file, 'index.html');
+    if (fs.existsSync(index)) { res.writeHead(200, { 'content-type': 'text/html' }); return res.end(fs.readFileSync(index)); }
+    res.writeHead(404); return res.end('not found');
+  }
+  res.writeHead(200, { 'content-type': TYPES[path.extname(file)] || 'application/octet-stream' });
+  res.end(fs.readFileSync(file));
+});
+await new Promise((r) => server.listen(0, '127.0.0.1', r));
+const origin = `http://127.0.0.1:${server.address().port}`;
+
+const context = await chromium.launchPersistentContext(fs.mkdtempSync(path.join(tmp, 'profile-')), {
+  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
+  headless: true,
+  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
+    '--disable-background-networking', '--disable-component-update', '--disable-sync'],
+  viewport: { width: 1280, height: 900 },
+});
+
+let passed = 0, failed = 0;
+const consoleErrors = [];
+const requests = [];
+async function newPage(query = '') {
+  const page = await context.newPage();
+  page.on('console', (m) => { if (m.type() === 'error') consoleErrors.push(m.text()); });
+  page.on('pageerror', (e) => consoleErrors.push(String(e)));
+  page.on('request', (r) => requests.push(r.url()));
+  await page.goto(`${origin}/web/index.html${query}`);
+  await page.evaluate(() => window.upetrack.ready);
+  return page;
+}
+async function test(name, fn) {
+  try { await fn(); passed++; console.log(`ok   ${name}`); }
+  catch (e) { failed++; console.log(`FAIL ${name}\n     ${e.stack || e}`); }
+}
+function assert(cond, msg) { if (!cond) throw new Error(msg); }
+const messageOf = (page) => page.evaluate(() => (document.getElementById('message').hidden ? '' : document.getElementById('message-text').textContent));
+
+// Native reference for the same sample (built by the caller).
+const native = path.join(root, 'target/release/upetrack');
+const nativeJson = path.join(tmp, 'native.json');
+execFileSync(native, ['track', path.join(root, 'samples/static-s'), '--out', nativeJson]);
+
+await test('page loads, default sample plays, nodes lie on the rope', async () => {
+  const page = await newPage('?autoplay=1');
+  await page.waitForFunction(() => window.upetrack.state.tracked >= 6, null, { timeout: 60000 });
+  const s = await page.evaluate(() => window.upetrack.state.results.slice(0, 7).map((r) => r.error));
+  assert(s.every((e) => e.length === 2), 'every early frame has an error');
+  const meanMm = s.reduce((a, e) => a + e[0], 0) / s.length;
+  const meanPx = s.reduce((a, e) => a + e[1], 0) / s.length;
+  console.log(`     unoccluded frames 0-6: mean ${meanMm.toFixed(2)} mm, ${meanPx.toFixed(2)} px`);
+  assert(meanMm < 5 && meanPx < 3, `nodes off the rope: ${meanMm} mm, ${meanPx} px`);
+  await page.waitForFunction(() => window.upetrack.state.tracked >= 24, null, { timeout: 60000 });
+  await page.screenshot({ path: path.join(artifacts, 'page.png') });
+  await page.close();
+});
+
+await test('wasm and native give the same nodes (within 1e-6 m)', async () => {
+  const page = await newPage('?autoplay=0');
+  const web = await page.evaluate(() => window.upetrack.trackAll());
+  const ref = JSON.parse(fs.readFileSync(nativeJson, 'utf8'));
+  assert(web.frames.length === ref.frames.length, `frame counts ${web.frames.length} vs ${ref.frames.length}`);
+  let worst = 0;
+  ref.frames.forEach((f, k) => f.nodes.forEach((p, j) => p.forEach((c, d) => { worst = Math.max(worst, Math.abs(c - web.frames[k].nodes[j][d])); })));
+  console.log(`     largest difference ${worst.toExponential(2)} m over ${ref.frames.length} frames`);
+  assert(worst < 1e-6, `largest difference ${worst}`);
+  const t = web.frames.slice(1).map((f) => f.total_ms).sort((a, b) => a - b);
+  const tr = web.frames.slice(1).map((f) => f.track_ms).sort((a, b) => a - b);
+  console.log(`     in Chromium: median track_ms ${tr[tr.length >> 1].toFixed(3)}, median total_ms ${t[t.length >> 1].toFixed(3)}`);
+  await page.close();
+});
+
+await test('a sequence loads from a folder', async () => {
+  const page = await newPage('?autoplay=0');
+  await page.setInputFiles('#folder', path.join(root, 'samples/dynamic-pull'));
+  await page.waitForFunction(() => window.upetrack.state.seq && window.upetrack.state.seq.name === 'dynamic-pull' && window.upetrack.state.tracked >= 0, null, { timeout: 30000 });
+  assert((await messageOf(page)) === '', await messageOf(page));
+  await page.close();
+});
+
+const zipPath = path.join(tmp, 'dynamic-pull.zip');
+execFileSync('python3', ['-c', `import shutil; shutil.make_archive(${JSON.stringify(zipPath.slice(0, -4))}, 'zip', ${JSON.stringify(path.join(root, 'samples'))}, 'dynamic-pull')`]);
+
+await test('a sequence loads from a .zip and tracks', async () => {
+  const page = await newPage('?autoplay=0');
+  await page.setInputFiles('#zip', zipPath);
+  await page.waitForFunction(() => window.upetrack.state.seq && window.upetrack.state.seq.name.endsWith('.zip') && window.upetrack.state.tracked >= 0, null, { timeout: 30000 });
+  const r = await page.evaluate(() => window.upetrack.trackAll());
+  assert(r.frames.length === 25, `${r.frames.length} frames`);
+  assert((await messageOf(page)) === '', await messageOf(page));
+  await page.close();
+});
+
+await test('a bad file and a wrong folder show a message and the page keeps working', async () => {
+  const page = await newPage('?autoplay=0');
+  const bad = path.join(tmp, 'notes.zip');
+  fs.writeFileSync(bad, 'this is not a zip');
+  await page.setInputFiles('#zip', bad);
+  await page.waitForFunction(() => !document.getElementById('message').hidden, null, { timeout: 10000 });
+  const m1 = await messageOf(page);
+  assert(m1.includes('notes.zip') && m1.includes('not a zip'), m1);
+  // A truncated JPEG inside an otherwise good folder names the file.
+  const broken = path.join(tmp, 'broken');
+  fs.cpSync(path.join(root, 'samples/static-s'), broken, { recursive: true });
+  const jpg = path.join(broken, 'color/000000.jpg');
+  fs.writeFileSync(jpg, fs.readFileSync(jpg).subarray(0, 300));
+  await page.click('#message-close');
+  await page.setInputFiles('#folder', broken);
+  await page.waitForFunction(() => !document.getElementById('message').hidden, null, { timeout: 10000 });
+  const m2 = await messageOf(page);
+  assert(m2.includes('000000.jpg'), m2);
+  // A folder that is not a sequence.
+  const wrong = path.join(tmp, 'wrong');
+  fs.mkdirSync(wrong, { recursive: true });
+  fs.writeFileSync(path.join(wrong, 'readme.txt'), 'hello');
+  await page.click('#message-close');
+  await page.setInputFiles('#folder', wrong);
+  await page.waitForFunction(() => !document.getElementById('message').hidden, null, { timeout: 10000 });
+  const m3 = await messageOf(page);
+  assert(m3.includes('camera_intrinsic.json'), m3);
+  await page.screenshot({ path: path.join(artifacts, 'bad-file.png') });
+  // Still usable: a sample loads and tracks.
+  await page.selectOption('#sample', 'dynamic-pull');
+  await page.waitForFunction(() => window.upetrack.state.seq && window.upetrack.state.seq.name === 'dynamic-pull' && window.upetrack.state.tracked >= 0, null, { timeout: 30000 });
+  await page.close();
+});
+
+await test('a drawn occlusion hides nodes, which are still estimated near the truth', async () => {
+  const page = await newPage('?sample=dynamic-pull&autoplay=0');
+  // Cover the upper bend of the S (not occluded by the sample itself) from frame 3 on.
+  const out = await page.evaluate(async () => {
+    const u = window.upetrack;
+    await u.goTo(3);
+    const p = u.state.results[3].nodesPx;
+    const xs = [], ys = [];
+    for (let k = 4; k <= 8; k++) { xs.push(p[2 * k]); ys.push(p[2 * k + 1]); }
+    const r = [Math.min(...xs) - 10, Math.min(...ys) - 10, Math.max(...xs) - Math.min(...xs) + 20, Math.max(...ys) - Math.min(...ys) + 20].map(Math.round);
+    u.addRect(r);
+    await u.goTo(24);
+    const res = u.state.results.slice(4, 25);
+    return { rect: r, hidden: res.map((x) => x.visible.filter((v) => !v).length), errors: res.map((x) => x.error[0]) };
+  });
+  const maxHidden = Math.max(...out.hidden);
+  const meanErr = out.errors.reduce((a, b) => a + b, 0) / out.errors.length;
+  console.log(`     rect ${out.rect}: up to ${maxHidden} hidden nodes, mean error ${meanErr.toFixed(2)} mm`);
+  assert(maxHidden >= 3, `only ${maxHidden} nodes hidden`);
+  assert(meanErr < 20, `mean error ${meanErr} mm`);
+  await page.screenshot({ path: path.join(artifacts, 'drawn-occlusion.png') });
+  await page.close();
+});
+
+await test('no console errors and no request leaves the origin', async () => {
+  const outside = requests.filter((u) => !u.startsWith(origin) && !u.startsWith('blob:') && !u.startsWith('data:'));
+  assert(outside.length === 0, `requests outside the origin: ${outside.slice(0, 5)}`);
+  const real = consoleErrors.filter((e) => !/Failed to load resource: the server responded with a status of 404/.test(e) || !e);
+  assert(real.length === 0, `console errors: ${real.slice(0, 5).join(' | ')}`);
+});
+
+await context.close();
+server.close();
+fs.rmSync(tmp, { recursive: true, force: true });
+console.log(`${passed} passed, ${failed} failed`);
+process.exit(failed ? 1 : 0);

@@ -1,0 +1,384 @@
+//! Thin wasm-bindgen bindings over the UPETrack core for the web page:
+//! a tracker built from an options object, a per-frame call returning flat
+//! typed arrays, image and .zip decoding, and sequence metadata parsing.
+#![warn(missing_docs)]
+
+use serde::{Deserialize, Serialize};
+use upetrack::metrics::{frame_error, frame_error_px};
+use upetrack::tracker::{FrameOutput, FrameStatus, Observation};
+use upetrack::{CameraIntrinsics, Frame, HsvRange, Params, Rect, Tracker, Vec3};
+use upetrack_io::decode::{decode_color, decode_depth};
+use upetrack_io::sequence::{OcclusionConfig, Sequence};
+use upetrack_io::source::{MemorySource, Source};
+use wasm_bindgen::prelude::*;
+
+fn js_err(e: impl std::fmt::Display) -> JsError {
+    JsError::new(&e.to_string())
+}
+
+/// Milliseconds from the page's (or worker's) `performance.now()`, or 0.
+fn now_ms() -> f64 {
+    let global = js_sys::global();
+    js_sys::Reflect::get(&global, &JsValue::from_str("performance"))
+        .ok()
+        .and_then(|perf| {
+            let now = js_sys::Reflect::get(&perf, &JsValue::from_str("now")).ok()?;
+            let f: js_sys::Function = now.dyn_into().ok()?;
+            f.call0(&perf).ok()?.as_f64()
+        })
+        .unwrap_or(0.0)
+}
+
+/// Options of a tracker: `{ camera: {width, height, fx, fy, cx, cy}, params?, hsv? }`.
+#[derive(Deserialize)]
+struct TrackerOptions {
+    camera: CameraIntrinsics,
+    #[serde(default)]
+    params: Option<Params>,
+    #[serde(default)]
+    hsv: Option<HsvRange>,
+}
+
+/// The default parameters as a plain object (documented in `core/src/params.rs`).
+#[wasm_bindgen(js_name = defaultParams)]
+pub fn default_params() -> Result<JsValue, JsError> {
+    serde_wasm_bindgen::to_value(&Params::default()).map_err(js_err)
+}
+
+/// The tracker of one sequence.
+#[wasm_bindgen]
+pub struct WasmTracker {
+    tracker: Tracker,
+    last_obs: Option<Observation>,
+    last: Option<FrameOutput>,
+}
+
+/// The result of one frame; arrays are copied out as typed arrays.
+#[wasm_bindgen]
+pub struct FrameResult {
+    nodes: Vec<f64>,
+    nodes_px: Vec<f32>,
+    visible: Vec<u8>,
+    status: String,
+    reason: Option<String>,
+    /// Tracking step time, ms.
+    pub track_ms: f64,
+    /// Segmentation, point cloud and tracking step, ms.
+    pub total_ms: f64,
+    /// Points in the cloud.
+    pub cloud_points: u32,
+}
+
+#[wasm_bindgen]
+impl FrameResult {
+    /// Nodes, metres, flat `[x0, y0, z0, x1, ...]`.
+    #[wasm_bindgen(getter)]
+    pub fn nodes(&self) -> js_sys::Float64Array {
+        js_sys::Float64Array::from(&self.nodes[..])
+    }
+    /// Nodes projected to pixels, flat `[u0, v0, u1, ...]` (NaN where not projectable).
+    #[wasm_bindgen(getter, js_name = nodesPx)]
+    pub fn nodes_px(&self) -> js_sys::Float32Array {
+        js_sys::Float32Array::from(&self.nodes_px[..])
+    }
+    /// Visibility per node (1 visible, 0 hidden).
+    #[wasm_bindgen(getter)]
+    pub fn visible(&self) -> js_sys::Uint8Array {
+        js_sys::Uint8Array::from(&self.visible[..])
+    }
+    /// `initialised`, `tracked` or `lost`.
+    #[wasm_bindgen(getter)]
+    pub fn status(&self) -> String {
+        self.status.clone()
+    }
+    /// Why the frame was lost, if it was.
+    #[wasm_bindgen(getter)]
+    pub fn reason(&self) -> Option<String> {
+        self.reason.clone()
+    }
+}
+
+#[wasm_bindgen]
+impl WasmTracker {
+    /// A tracker from `{ camera, params?, hsv? }`; missing parameters take their defaults.
+    #[wasm_bindgen(constructor)]
+    pub fn new(options: JsValue) -> Result<WasmTracker, JsError> {
+        let o: TrackerOptions = serde_wasm_bindgen::from_value(options).map_err(js_err)?;
+        let tracker = Tracker::new(o.params.unwrap_or_default(), o.camera, o.hsv.unwrap_or_default()).map_err(js_err)?;
+        Ok(Self {
+            tracker,
+            last_obs: None,
+            last: None,
+        })
+    }
+
+    /// Replaces the parameters (a full or partial object); effective next frame.
+    #[wasm_bindgen(js_name = setParams)]
+    pub fn set_params(&mut self, params: JsValue) -> Result<(), JsError> {
+        let p: Params = serde_wasm_bindgen::from_value(params).map_err(js_err)?;
+        self.tracker.set_params(p).map_err(js_err)
+    }
+
+    /// The parameters in force.
+    pub fn params(&self) -> Result<JsValue, JsError> {
+        serde_wasm_bindgen::to_value(self.tracker.params()).map_err(js_err)
+    }
+
+    /// Replaces the HSV range (`[h, s, v]` lower and upper, OpenCV convention).
+    #[wasm_bindgen(js_name = setHsv)]
+    pub fn set_hsv(&mut self, lower: &[u8], upper: &[u8]) -> Result<(), JsError> {
+        let (Ok(lower), Ok(upper)) = (<[u8; 3]>::try_from(lower), <[u8; 3]>::try_from(upper)) else {
+            return Err(JsError::new("HSV bounds must have three values each"));
+        };
+        self.tracker.set_hsv(HsvRange { lower, upper }).map_err(js_err)
+    }
+
+    /// Forgets the state; the next frame initialises.
+    pub fn reset(&mut self) {
+        self.tracker.reset();
+    }
+
+    /// Tracks one frame. `rgb` is RGB8, `depth` 16-bit units, `occlusions`
+    /// flat `[x, y, w, h, ...]` rectangles blacked out before segmentation.
+    pub fn track(
+        &mut self,
+        width: u32,
+        height: u32,
+        rgb: &[u8],
+        depth: &[u16],
+        depth_scale: f64,
+        occlusions: &[i32],
+    ) -> Result<FrameResult, JsError> {
+        let frame = Frame::new(width, height, rgb, depth, depth_scale).map_err(js_err)?;
+        let rects: Vec<Rect> = occlusions
+            .chunks_exact(4)
+            .map(|r| Rect {
+                x: r[0] as i64,
+                y: r[1] as i64,
+                w: r[2] as i64,
+                h: r[3] as i64,
+            })
+            .collect();
+        let t0 = now_ms();
+        let obs = self.tracker.observe(&frame, &rects).map_err(js_err)?;
+        let t1 = now_ms();
+        let out = self.tracker.update(&frame, &obs);
+        let t2 = now_ms();
+        let cam = *self.tracker.camera();
+        let mut nodes_px = Vec::with_capacity(out.nodes.len() * 2);
+        for p in &out.nodes {
+            match cam.project(p) {
+                Some(q) => nodes_px.extend([q.x as f32, q.y as f32]),
+                None => nodes_px.extend([f32::NAN, f32::NAN]),
+            }
+        }
+        let (status, reason) = match &out.status {
+            FrameStatus::Initialised => ("initialised", None),
+            FrameStatus::Tracked => ("tracked", None),
+            FrameStatus::Lost(r) => ("lost", Some(r.to_string())),
+        };
+        let result = FrameResult {
+            nodes: out.nodes.iter().flat_map(|p| [p.x, p.y, p.z]).collect(),
+            nodes_px,
+            visible: out.visible.iter().map(|&v| v as u8).collect(),
+            status: status.into(),
+            reason,
+            track_ms: t2 - t1,
+            total_ms: t2 - t0,
+            cloud_points: obs.cloud.len() as u32,
+        };
+        self.last_obs = Some(obs);
+        self.last = Some(out);
+        Ok(result)
+    }
+
+    /// The last frame's mask, one byte per pixel (1 rope).
+    #[wasm_bindgen(js_name = lastMask)]
+    pub fn last_mask(&self) -> Vec<u8> {
+        self.last_obs.as_ref().map_or_else(Vec::new, |o| o.mask.data.iter().map(|&b| b as u8).collect())
+    }
+
+    /// Frame error of the last frame against ground truth (flat metres):
+    /// `[mm, px]`, or an empty array when there is nothing to compare.
+    #[wasm_bindgen(js_name = lastError)]
+    pub fn last_error(&self, truth: &[f64]) -> Vec<f64> {
+        let Some(out) = &self.last else { return Vec::new() };
+        let gt: Vec<Vec3> = truth.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
+        match (frame_error(&out.nodes, &gt), frame_error_px(&out.nodes, &gt, self.tracker.camera())) {
+            (Some(mm), Some(px)) => vec![mm * 1000.0, px],
+            _ => Vec::new(),
+        }
+    }
+}
+
+/// A decoded colour/depth pair.
+#[wasm_bindgen]
+pub struct DecodedFrame {
+    /// Width.
+    pub width: u32,
+    /// Height.
+    pub height: u32,
+    rgb: Vec<u8>,
+    depth: Vec<u16>,
+}
+
+#[wasm_bindgen]
+impl DecodedFrame {
+    /// RGB8 bytes.
+    #[wasm_bindgen(getter)]
+    pub fn rgb(&self) -> js_sys::Uint8Array {
+        js_sys::Uint8Array::from(&self.rgb[..])
+    }
+    /// RGBA8 bytes, for an ImageData.
+    #[wasm_bindgen(getter)]
+    pub fn rgba(&self) -> js_sys::Uint8ClampedArray {
+        let rgba: Vec<u8> = self.rgb.chunks_exact(3).flat_map(|p| [p[0], p[1], p[2], 255]).collect();
+        js_sys::Uint8ClampedArray::from(&rgba[..])
+    }
+    /// Depth units.
+    #[wasm_bindgen(getter)]
+    pub fn depth(&self) -> js_sys::Uint16Array {
+        js_sys::Uint16Array::from(&self.depth[..])
+    }
+}
+
+/// Decodes a colour file (PNG or JPEG) and a depth file (16-bit PNG); the
+/// names are used in error messages. Both must have the same size.
+#[wasm_bindgen(js_name = decodeFrame)]
+pub fn decode_frame(color: &[u8], color_name: &str, depth: &[u8], depth_name: &str) -> Result<DecodedFrame, JsError> {
+    let c = decode_color(color, color_name).map_err(js_err)?;
+    let d = decode_depth(depth, depth_name).map_err(js_err)?;
+    if (c.width, c.height) != (d.width, d.height) {
+        return Err(JsError::new(&format!(
+            "{depth_name}: depth is {}x{} but {color_name} is {}x{}",
+            d.width, d.height, c.width, c.height
+        )));
+    }
+    Ok(DecodedFrame {
+        width: c.width,
+        height: c.height,
+        rgb: c.data,
+        depth: d.data,
+    })
+}
+
+/// A .zip unpacked in memory; frames are read from it on demand.
+#[wasm_bindgen]
+pub struct Archive {
+    source: MemorySource,
+}
+
+#[wasm_bindgen]
+impl Archive {
+    /// Unpacks `bytes`; `name` appears in error messages.
+    #[wasm_bindgen(constructor)]
+    pub fn new(bytes: &[u8], name: &str) -> Result<Archive, JsError> {
+        Ok(Self {
+            source: upetrack_io::archive::unpack_zip(bytes, name).map_err(js_err)?,
+        })
+    }
+
+    /// Every file path inside.
+    pub fn names(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        let mut dirs = vec![String::new()];
+        while let Some(d) = dirs.pop() {
+            for n in self.source.list(&d).unwrap_or_default() {
+                out.push(if d.is_empty() { n } else { format!("{d}/{n}") });
+            }
+            for sub in ["color", "rgb", "image", "depth"] {
+                if d.is_empty() && self.source.is_dir(sub) {
+                    dirs.push(sub.to_string());
+                }
+            }
+        }
+        out
+    }
+
+    /// The bytes of one file.
+    pub fn read(&self, path: &str) -> Result<Vec<u8>, JsError> {
+        self.source.read(path).map_err(js_err)
+    }
+}
+
+/// What the page needs to know about a sequence.
+#[derive(Serialize)]
+struct SequenceInfo {
+    camera: CameraIntrinsics,
+    depth_scale: f64,
+    fps: f64,
+    hsv: HsvRange,
+    occlusions: Vec<OcclusionConfig>,
+    color_files: Vec<String>,
+    depth_files: Vec<String>,
+    /// Flat metres per frame, or null.
+    groundtruth: Vec<Option<Vec<f64>>>,
+}
+
+/// Reads a sequence's metadata. `json` maps file names (`camera_intrinsic.json`,
+/// `intrinsic.json`, `dlo.json`, `groundtruth.json`...) to their bytes;
+/// `images` lists every image path (`color/000000.jpg`, `depth/...`), whose
+/// bytes are not needed yet. Returns `{camera, depth_scale, fps, hsv,
+/// occlusions, color_files, depth_files, groundtruth}`.
+#[wasm_bindgen(js_name = readSequenceInfo)]
+pub fn read_sequence_info(name: &str, json: JsValue, images: Vec<String>) -> Result<JsValue, JsError> {
+    let files: std::collections::BTreeMap<String, serde_bytes_compat::Bytes> =
+        serde_wasm_bindgen::from_value(json).map_err(js_err)?;
+    let mut source = MemorySource::new(name);
+    for (k, v) in files {
+        source.insert(&k, v.0);
+    }
+    for img in &images {
+        source.insert(img, Vec::new());
+    }
+    let seq = Sequence::open(source).map_err(js_err)?;
+    let info = SequenceInfo {
+        camera: seq.camera,
+        depth_scale: seq.depth_scale,
+        fps: seq.fps,
+        hsv: seq.hsv,
+        occlusions: seq.config.occlusions.clone(),
+        color_files: seq.color_files.clone(),
+        depth_files: seq.depth_files.clone(),
+        groundtruth: seq
+            .groundtruth
+            .iter()
+            .map(|g| g.as_ref().map(|pts| pts.iter().flat_map(|p| [p.x, p.y, p.z]).collect()))
+            .collect(),
+    };
+    info.serialize(&serde_wasm_bindgen::Serializer::json_compatible()).map_err(js_err)
+}
+
+mod serde_bytes_compat {
+    //! A `Uint8Array` (or array of numbers) read into bytes.
+    use serde::{Deserialize, Deserializer};
+
+    /// Owned bytes.
+    pub struct Bytes(pub Vec<u8>);
+
+    impl<'de> Deserialize<'de> for Bytes {
+        fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+            struct V;
+            impl<'de> serde::de::Visitor<'de> for V {
+                type Value = Bytes;
+                fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                    f.write_str("bytes")
+                }
+                fn visit_bytes<E>(self, v: &[u8]) -> Result<Bytes, E> {
+                    Ok(Bytes(v.to_vec()))
+                }
+                fn visit_byte_buf<E>(self, v: Vec<u8>) -> Result<Bytes, E> {
+                    Ok(Bytes(v))
+                }
+                fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut s: A) -> Result<Bytes, A::Error> {
+                    let mut out = Vec::new();
+                    while let Some(b) = s.next_element::<u8>()? {
+                        out.push(b);
+                    }
+                    Ok(Bytes(out))
+                }
+            }
+            d.deserialize_bytes(V)
+        }
+    }
+}
