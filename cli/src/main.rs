@@ -110,7 +110,9 @@ fn load_params(path: Option<&str>) -> Result<Params, CliError> {
 pub type AnySequence = Sequence<Box<dyn upetrack_io::Source>>;
 
 fn open_sequence(path: &str) -> Result<AnySequence, CliError> {
-    Ok(Sequence::open(upetrack_io::source::open_path(Path::new(path))?)?)
+    Ok(Sequence::open(upetrack_io::source::open_path(Path::new(
+        path,
+    ))?)?)
 }
 
 fn now_ms_since(start: Instant) -> impl FnMut() -> f64 {

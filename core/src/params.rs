@@ -69,6 +69,10 @@ pub struct Params {
     /// After tracking is lost, re-initialise only once the centre line found
     /// is at least this fraction of the first initialisation's length. Default 0.8.
     pub reinit_length_fraction: f64,
+    /// When fewer than this fraction of the nodes are visible, try to
+    /// re-initialise (accepted under `reinit_length_fraction`): the rope may
+    /// have jumped. 0 turns it off. Default 0.5.
+    pub reinit_visible_fraction: f64,
 }
 
 impl Default for Params {
@@ -94,6 +98,7 @@ impl Default for Params {
             max_depth: 3.0,
             min_blob_pixels: 150,
             reinit_length_fraction: 0.8,
+            reinit_visible_fraction: 0.5,
         }
     }
 }

@@ -229,6 +229,15 @@ impl Tracker {
                 }
             };
         }
+        // Few nodes left on the rope: it may have jumped. A full-length rope
+        // in view replaces the state; otherwise tracking goes on.
+        let seen = visible.iter().filter(|&&v| v).count() as f64;
+        if seen < p.reinit_visible_fraction * prev.len() as f64 {
+            if let Ok(out) = self.try_initialise(frame, obs) {
+                return out;
+            }
+        }
+        let p = &self.params;
         let mut nodes = prev.clone();
         let em = register(&obs.cloud, &mut nodes, &visible, &p.em());
         let upe = estimate_hidden(&mut nodes, &visible, &prev, &p.upe());

@@ -26,8 +26,8 @@ pub fn unpack_zip(bytes: &[u8], name: &str) -> Result<MemorySource, SequenceErro
     if !is_zip(bytes) {
         return Err(invalid("not a zip archive".into()));
     }
-    let mut archive =
-        zip::ZipArchive::new(std::io::Cursor::new(bytes)).map_err(|e| invalid(format!("not a readable zip archive: {e}")))?;
+    let mut archive = zip::ZipArchive::new(std::io::Cursor::new(bytes))
+        .map_err(|e| invalid(format!("not a readable zip archive: {e}")))?;
     if archive.len() > MAX_ARCHIVE_ENTRIES {
         return Err(SequenceError::TooLarge {
             path: name.to_string(),
@@ -39,9 +39,13 @@ pub fn unpack_zip(bytes: &[u8], name: &str) -> Result<MemorySource, SequenceErro
     // Declared sizes first: nothing is unpacked if the total is too large.
     let mut total = 0u64;
     for i in 0..archive.len() {
-        let entry = archive.by_index_raw(i).map_err(|e| invalid(format!("entry {i}: {e}")))?;
+        let entry = archive
+            .by_index_raw(i)
+            .map_err(|e| invalid(format!("entry {i}: {e}")))?;
         total = total.saturating_add(entry.size());
-        if entry.compressed_size() > 0 && entry.size() / entry.compressed_size().max(1) > MAX_COMPRESSION_RATIO {
+        if entry.compressed_size() > 0
+            && entry.size() / entry.compressed_size().max(1) > MAX_COMPRESSION_RATIO
+        {
             return Err(invalid(format!(
                 "entry `{}` claims {} bytes from {} (ratio above {MAX_COMPRESSION_RATIO}): refused as a zip bomb",
                 entry.name(),
@@ -60,7 +64,9 @@ pub fn unpack_zip(bytes: &[u8], name: &str) -> Result<MemorySource, SequenceErro
     }
     let mut source = MemorySource::new(name);
     for i in 0..archive.len() {
-        let mut entry = archive.by_index(i).map_err(|e| invalid(format!("entry {i}: {e}")))?;
+        let mut entry = archive
+            .by_index(i)
+            .map_err(|e| invalid(format!("entry {i}: {e}")))?;
         if entry.is_dir() {
             continue;
         }
@@ -70,7 +76,9 @@ pub fn unpack_zip(bytes: &[u8], name: &str) -> Result<MemorySource, SequenceErro
             || raw_name.split(['/', '\\']).any(|c| c == "..")
             || raw_name.chars().nth(1) == Some(':');
         if unsafe_name {
-            return Err(invalid(format!("entry `{raw_name}` points outside the archive: refused")));
+            return Err(invalid(format!(
+                "entry `{raw_name}` points outside the archive: refused"
+            )));
         }
         let declared = entry.size();
         let mut data = Vec::with_capacity(declared.min(64 * 1024 * 1024) as usize);
@@ -79,7 +87,9 @@ pub fn unpack_zip(bytes: &[u8], name: &str) -> Result<MemorySource, SequenceErro
             .read_to_end(&mut data)
             .map_err(|e| invalid(format!("entry `{raw_name}`: {e}")))?;
         if data.len() as u64 != declared {
-            return Err(invalid(format!("entry `{raw_name}` is not the size its header declares")));
+            return Err(invalid(format!(
+                "entry `{raw_name}` is not the size its header declares"
+            )));
         }
         source.insert(&raw_name, data);
     }
@@ -99,8 +109,8 @@ mod tests {
         let mut buf = std::io::Cursor::new(Vec::new());
         {
             let mut w = zip::ZipWriter::new(&mut buf);
-            let opts: zip::write::SimpleFileOptions =
-                zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
+            let opts: zip::write::SimpleFileOptions = zip::write::SimpleFileOptions::default()
+                .compression_method(zip::CompressionMethod::Deflated);
             for (name, data) in entries {
                 w.start_file(*name, opts).expect("start");
                 w.write_all(data).expect("write");
@@ -112,7 +122,10 @@ mod tests {
 
     #[test]
     fn unpacks_and_strips_the_sequence_folder() {
-        let z = zip_of(&[("seq/camera_intrinsic.json", b"{}"), ("seq/color/0.png", b"x")]);
+        let z = zip_of(&[
+            ("seq/camera_intrinsic.json", b"{}"),
+            ("seq/color/0.png", b"x"),
+        ]);
         let s = unpack_zip(&z, "seq.zip").expect("unpack");
         use crate::source::Source;
         assert!(s.is_file("camera_intrinsic.json") && s.is_file("color/0.png"));
@@ -123,9 +136,13 @@ mod tests {
         let z = zip_of(&[("../evil.json", b"{}")]);
         let e = unpack_zip(&z, "evil.zip").expect_err("refused").to_string();
         assert!(e.contains("evil.zip") && e.contains("outside"), "{e}");
-        let e = unpack_zip(b"hello", "x.zip").expect_err("refused").to_string();
+        let e = unpack_zip(b"hello", "x.zip")
+            .expect_err("refused")
+            .to_string();
         assert!(e.contains("not a zip"), "{e}");
-        let e = unpack_zip(b"PK\x03\x04garbage", "y.zip").expect_err("refused").to_string();
+        let e = unpack_zip(b"PK\x03\x04garbage", "y.zip")
+            .expect_err("refused")
+            .to_string();
         assert!(e.contains("y.zip"), "{e}");
     }
 

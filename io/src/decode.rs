@@ -110,7 +110,9 @@ pub fn decode_color(bytes: &[u8], path: &str) -> Result<RgbImage, SequenceError>
     } else if is_jpeg(bytes) {
         use zune_core::colorspace::ColorSpace;
         use zune_core::options::DecoderOptions;
+        // Strict: a truncated or corrupt file is an error, not a grey tail.
         let options = DecoderOptions::default()
+            .set_strict_mode(true)
             .jpeg_set_out_colorspace(ColorSpace::RGB)
             .set_max_width(MAX_IMAGE_SIDE as usize)
             .set_max_height(MAX_IMAGE_SIDE as usize);

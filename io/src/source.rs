@@ -199,25 +199,6 @@ impl Source for MemorySource {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn memory_source_lists_one_level_and_strips_the_sequence_folder() {
-        let mut m = MemorySource::new("drop");
-        m.insert("seq/color/000001.jpg", vec![1]);
-        m.insert("seq/color/000000.jpg", vec![0]);
-        m.insert("seq/camera_intrinsic.json", vec![]);
-        m.strip_common_root();
-        let mut names = m.list("color").expect("list");
-        names.sort();
-        assert_eq!(names, ["000000.jpg", "000001.jpg"]);
-        assert!(m.is_dir("color") && m.is_file("camera_intrinsic.json"));
-        assert_eq!(m.read("color/000001.jpg").expect("read"), vec![1]);
-    }
-}
-
 impl Source for Box<dyn Source> {
     fn list(&self, dir: &str) -> Result<Vec<String>, SequenceError> {
         (**self).list(dir)
@@ -249,7 +230,10 @@ pub fn open_path(path: &std::path::Path) -> Result<Box<dyn Source>, SequenceErro
         });
     }
     let len = std::fs::metadata(path)
-        .map_err(|source| SequenceError::Io { path: shown.clone(), source })?
+        .map_err(|source| SequenceError::Io {
+            path: shown.clone(),
+            source,
+        })?
         .len();
     if len > crate::archive::MAX_ARCHIVE_BYTES {
         return Err(SequenceError::TooLarge {
@@ -259,7 +243,10 @@ pub fn open_path(path: &std::path::Path) -> Result<Box<dyn Source>, SequenceErro
             limit: crate::archive::MAX_ARCHIVE_BYTES,
         });
     }
-    let bytes = std::fs::read(path).map_err(|source| SequenceError::Io { path: shown.clone(), source })?;
+    let bytes = std::fs::read(path).map_err(|source| SequenceError::Io {
+        path: shown.clone(),
+        source,
+    })?;
     if !crate::archive::is_zip(&bytes) {
         return Err(SequenceError::invalid(
             &shown,
@@ -267,4 +254,23 @@ pub fn open_path(path: &std::path::Path) -> Result<Box<dyn Source>, SequenceErro
         ));
     }
     Ok(Box::new(crate::archive::unpack_zip(&bytes, &shown)?))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn memory_source_lists_one_level_and_strips_the_sequence_folder() {
+        let mut m = MemorySource::new("drop");
+        m.insert("seq/color/000001.jpg", vec![1]);
+        m.insert("seq/color/000000.jpg", vec![0]);
+        m.insert("seq/camera_intrinsic.json", vec![]);
+        m.strip_common_root();
+        let mut names = m.list("color").expect("list");
+        names.sort();
+        assert_eq!(names, ["000000.jpg", "000001.jpg"]);
+        assert!(m.is_dir("color") && m.is_file("camera_intrinsic.json"));
+        assert_eq!(m.read("color/000001.jpg").expect("read"), vec![1]);
+    }
 }

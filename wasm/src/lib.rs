@@ -104,7 +104,12 @@ impl WasmTracker {
     #[wasm_bindgen(constructor)]
     pub fn new(options: JsValue) -> Result<WasmTracker, JsError> {
         let o: TrackerOptions = serde_wasm_bindgen::from_value(options).map_err(js_err)?;
-        let tracker = Tracker::new(o.params.unwrap_or_default(), o.camera, o.hsv.unwrap_or_default()).map_err(js_err)?;
+        let tracker = Tracker::new(
+            o.params.unwrap_or_default(),
+            o.camera,
+            o.hsv.unwrap_or_default(),
+        )
+        .map_err(js_err)?;
         Ok(Self {
             tracker,
             last_obs: None,
@@ -127,10 +132,13 @@ impl WasmTracker {
     /// Replaces the HSV range (`[h, s, v]` lower and upper, OpenCV convention).
     #[wasm_bindgen(js_name = setHsv)]
     pub fn set_hsv(&mut self, lower: &[u8], upper: &[u8]) -> Result<(), JsError> {
-        let (Ok(lower), Ok(upper)) = (<[u8; 3]>::try_from(lower), <[u8; 3]>::try_from(upper)) else {
+        let (Ok(lower), Ok(upper)) = (<[u8; 3]>::try_from(lower), <[u8; 3]>::try_from(upper))
+        else {
             return Err(JsError::new("HSV bounds must have three values each"));
         };
-        self.tracker.set_hsv(HsvRange { lower, upper }).map_err(js_err)
+        self.tracker
+            .set_hsv(HsvRange { lower, upper })
+            .map_err(js_err)
     }
 
     /// Forgets the state; the next frame initialises.
@@ -195,16 +203,26 @@ impl WasmTracker {
     /// The last frame's mask, one byte per pixel (1 rope).
     #[wasm_bindgen(js_name = lastMask)]
     pub fn last_mask(&self) -> Vec<u8> {
-        self.last_obs.as_ref().map_or_else(Vec::new, |o| o.mask.data.iter().map(|&b| b as u8).collect())
+        self.last_obs
+            .as_ref()
+            .map_or_else(Vec::new, |o| o.mask.data.iter().map(|&b| b as u8).collect())
     }
 
     /// Frame error of the last frame against ground truth (flat metres):
     /// `[mm, px]`, or an empty array when there is nothing to compare.
     #[wasm_bindgen(js_name = lastError)]
     pub fn last_error(&self, truth: &[f64]) -> Vec<f64> {
-        let Some(out) = &self.last else { return Vec::new() };
-        let gt: Vec<Vec3> = truth.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
-        match (frame_error(&out.nodes, &gt), frame_error_px(&out.nodes, &gt, self.tracker.camera())) {
+        let Some(out) = &self.last else {
+            return Vec::new();
+        };
+        let gt: Vec<Vec3> = truth
+            .chunks_exact(3)
+            .map(|c| Vec3::new(c[0], c[1], c[2]))
+            .collect();
+        match (
+            frame_error(&out.nodes, &gt),
+            frame_error_px(&out.nodes, &gt, self.tracker.camera()),
+        ) {
             (Some(mm), Some(px)) => vec![mm * 1000.0, px],
             _ => Vec::new(),
         }
@@ -232,7 +250,11 @@ impl DecodedFrame {
     /// RGBA8 bytes, for an ImageData.
     #[wasm_bindgen(getter)]
     pub fn rgba(&self) -> js_sys::Uint8ClampedArray {
-        let rgba: Vec<u8> = self.rgb.chunks_exact(3).flat_map(|p| [p[0], p[1], p[2], 255]).collect();
+        let rgba: Vec<u8> = self
+            .rgb
+            .chunks_exact(3)
+            .flat_map(|p| [p[0], p[1], p[2], 255])
+            .collect();
         js_sys::Uint8ClampedArray::from(&rgba[..])
     }
     /// Depth units.
@@ -245,7 +267,12 @@ impl DecodedFrame {
 /// Decodes a colour file (PNG or JPEG) and a depth file (16-bit PNG); the
 /// names are used in error messages. Both must have the same size.
 #[wasm_bindgen(js_name = decodeFrame)]
-pub fn decode_frame(color: &[u8], color_name: &str, depth: &[u8], depth_name: &str) -> Result<DecodedFrame, JsError> {
+pub fn decode_frame(
+    color: &[u8],
+    color_name: &str,
+    depth: &[u8],
+    depth_name: &str,
+) -> Result<DecodedFrame, JsError> {
     let c = decode_color(color, color_name).map_err(js_err)?;
     let d = decode_depth(depth, depth_name).map_err(js_err)?;
     if (c.width, c.height) != (d.width, d.height) {
@@ -321,7 +348,11 @@ struct SequenceInfo {
 /// bytes are not needed yet. Returns `{camera, depth_scale, fps, hsv,
 /// occlusions, color_files, depth_files, groundtruth}`.
 #[wasm_bindgen(js_name = readSequenceInfo)]
-pub fn read_sequence_info(name: &str, json: JsValue, images: Vec<String>) -> Result<JsValue, JsError> {
+pub fn read_sequence_info(
+    name: &str,
+    json: JsValue,
+    images: Vec<String>,
+) -> Result<JsValue, JsError> {
     let files: std::collections::BTreeMap<String, serde_bytes_compat::Bytes> =
         serde_wasm_bindgen::from_value(json).map_err(js_err)?;
     let mut source = MemorySource::new(name);
@@ -343,10 +374,14 @@ pub fn read_sequence_info(name: &str, json: JsValue, images: Vec<String>) -> Res
         groundtruth: seq
             .groundtruth
             .iter()
-            .map(|g| g.as_ref().map(|pts| pts.iter().flat_map(|p| [p.x, p.y, p.z]).collect()))
+            .map(|g| {
+                g.as_ref()
+                    .map(|pts| pts.iter().flat_map(|p| [p.x, p.y, p.z]).collect())
+            })
             .collect(),
     };
-    info.serialize(&serde_wasm_bindgen::Serializer::json_compatible()).map_err(js_err)
+    info.serialize(&serde_wasm_bindgen::Serializer::json_compatible())
+        .map_err(js_err)
 }
 
 mod serde_bytes_compat {
@@ -370,7 +405,10 @@ mod serde_bytes_compat {
                 fn visit_byte_buf<E>(self, v: Vec<u8>) -> Result<Bytes, E> {
                     Ok(Bytes(v))
                 }
-                fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut s: A) -> Result<Bytes, A::Error> {
+                fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                    self,
+                    mut s: A,
+                ) -> Result<Bytes, A::Error> {
                     let mut out = Vec::new();
                     while let Some(b) = s.next_element::<u8>()? {
                         out.push(b);
