@@ -22,7 +22,7 @@ USAGE:
   upetrack eval <sequence>... [--params <params.json>] [--json <out.json>] [--markdown <out.md>] [--per-frame <out.csv>]
   upetrack synth <scenario> <dir> [--frames N] [--seed S] [--hd]
   upetrack bench [<sequence>...] [--frames N]
-  upetrack overlay <sequence> <result.json> <frame> <out.png>
+  upetrack overlay <sequence> <result.json> <frame> <out.png> [--depth]
   upetrack scenarios
 
 A sequence is a folder in the layout of docs/sequence-format.md, or a .zip of one.

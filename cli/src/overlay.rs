@@ -45,7 +45,7 @@ fn disc(rgb: &mut [u8], w: i64, h: i64, p: (f64, f64), r: i64, c: [u8; 3]) {
 
 /// `upetrack overlay <sequence> <result.json> <frame> <out.png>`.
 pub fn cmd_overlay(raw: &[String]) -> Result<(), CliError> {
-    let args = Args::parse(raw, &[], &[])?;
+    let args = Args::parse(raw, &["depth"], &[])?;
     let [seq_path, result_path, frame, out] = args.positional.as_slice() else {
         return Err(CliError(format!(
             "overlay takes a sequence, a result, a frame and an output\n\n{USAGE}"
@@ -62,6 +62,25 @@ pub fn cmd_overlay(raw: &[String]) -> Result<(), CliError> {
     let decoded = seq.frame(index)?;
     let (w, h) = (decoded.width as i64, decoded.height as i64);
     let mut rgb = decoded.color;
+    if args.flag("depth") {
+        // Depth as a colour ramp (near red, far blue), black where invalid.
+        let valid = decoded.depth.iter().filter(|&&d| d > 0);
+        let lo = valid.clone().min().copied().unwrap_or(0) as f64;
+        let hi = valid.max().copied().unwrap_or(1) as f64;
+        for (k, &d) in decoded.depth.iter().enumerate() {
+            let c = if d == 0 {
+                [0, 0, 0]
+            } else {
+                let t = (d as f64 - lo) / (hi - lo).max(1.0);
+                [
+                    (255.0 * (1.0 - t)) as u8,
+                    (80.0 + 120.0 * (1.0 - (2.0 * t - 1.0).abs())) as u8,
+                    (255.0 * t) as u8,
+                ]
+            };
+            rgb[3 * k..3 * k + 3].copy_from_slice(&c);
+        }
+    }
     for r in seq.occlusions_at(index) {
         if let Some((x0, x1, y0, y1)) = r.clip(decoded.width, decoded.height) {
             for y in y0..y1 {

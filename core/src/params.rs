@@ -46,6 +46,11 @@ pub struct Params {
     pub visibility_radius: f64,
     /// Points needed within `r_vis` for a node to be visible (`V_lim`). Paper: 3.
     pub visibility_min_points: u32,
+    /// A node is visible only if it also has at least this fraction of the
+    /// median neighbour count of the visible nodes, so that a node at the
+    /// edge of an occlusion counts as hidden (0: the paper's rule alone).
+    /// Default 0.5; see `docs/algorithm-notes.md`.
+    pub visibility_min_fraction: f64,
     /// Weight of the uniform outlier component (`w`, Eq. 3). Default 0.1.
     pub outlier_weight: f64,
     /// EM stops when no node moves more than this in an iteration, metres. Default 0.1 mm.
@@ -88,6 +93,7 @@ impl Default for Params {
             displacement_weight: 0.75,
             visibility_radius: 0.020,
             visibility_min_points: 3,
+            visibility_min_fraction: 0.5,
             outlier_weight: 0.1,
             em_tolerance: 1e-4,
             em_max_iterations: 10,
@@ -154,6 +160,13 @@ impl Params {
             v as f64,
             (1..=100_000).contains(&v),
             "an integer in 1..=100000",
+        )?;
+        let vf = self.visibility_min_fraction;
+        check(
+            "visibility_min_fraction",
+            vf,
+            (0.0..=1.0).contains(&vf),
+            "in [0, 1]",
         )?;
         let w = self.outlier_weight;
         check("outlier_weight", w, (0.0..1.0).contains(&w), "in [0, 1)")?;
@@ -265,7 +278,10 @@ mod tests {
     #[test]
     fn invalid_values_are_rejected_by_name() {
         type Case = (&'static str, fn(&mut Params));
-        let cases: [Case; 8] = [
+        let cases: [Case; 9] = [
+            ("visibility_min_fraction", |p| {
+                p.visibility_min_fraction = 1.5
+            }),
             ("node_count", |p| p.node_count = 3),
             ("node_count", |p| p.node_count = 5_000_000),
             ("displacement_decay", |p| p.displacement_decay = f64::NAN),

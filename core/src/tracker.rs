@@ -15,7 +15,7 @@ use crate::point_cloud::build_cloud;
 use crate::registration::{register, EmReport};
 use crate::resampling::{polyline_length, resample_uniform};
 use crate::segmentation::{segment, HsvRange, Mask, Rect, SegmentationError};
-use crate::visibility::visible_nodes;
+use crate::visibility::visible_nodes_relative;
 
 /// Errors building or reconfiguring a tracker.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -212,11 +212,12 @@ impl Tracker {
 
         let p = &self.params;
         let prev = state.nodes.clone();
-        let visible = visible_nodes(
+        let visible = visible_nodes_relative(
             &prev,
             &obs.cloud,
             p.visibility_radius,
             p.visibility_min_points as usize,
+            p.visibility_min_fraction,
         );
         if !visible.iter().any(|&v| v) {
             return match self.try_initialise(frame, obs) {
@@ -287,11 +288,12 @@ impl Tracker {
             self.known_length = Some(init.length);
         }
         let p = &self.params;
-        let visible = visible_nodes(
+        let visible = visible_nodes_relative(
             &init.nodes,
             &obs.cloud,
             p.visibility_radius,
             p.visibility_min_points as usize,
+            p.visibility_min_fraction,
         );
         self.state = Some(TrackState {
             nodes: init.nodes.clone(),

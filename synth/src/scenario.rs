@@ -261,13 +261,15 @@ impl Scenario {
                     offset: Vec3::new(0.05, 0.0, 0.12),
                     circular: true,
                 });
-                let y0 = rope.x[frac(0.5)].y;
+                // Halfway between the rope's ends and its apex, so that the
+                // box crosses both legs as it travels along x.
+                let y0 = 0.5 * (rope.x[frac(0.5)].y + rope.x[0].y);
                 boxes.push((
                     at(0.35),
                     at(0.8),
                     OccluderBox {
-                        min: Vec3::new(-0.45, y0 - 0.05, 0.20),
-                        max: Vec3::new(-0.41, y0 + 0.05, 0.22),
+                        min: Vec3::new(-0.45, y0 - 0.04, 0.20),
+                        max: Vec3::new(-0.40, y0 + 0.04, 0.22),
                     },
                     Vec3::new(0.75, 0.0, 0.0),
                 ));

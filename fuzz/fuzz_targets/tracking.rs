@@ -1,0 +1,36 @@
+//! The tracking step on arbitrary point clouds and node sets: visibility,
+//! registration, UPE and resampling must not panic, and finite inputs must
+//! give finite nodes.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use upetrack::math::Vec3;
+use upetrack::Params;
+
+fuzz_target!(|data: &[u8]| {
+    if data.len() < 2 {
+        return;
+    }
+    let m = 4 + (data[0] as usize % 40);
+    let values: Vec<f64> = data[1..]
+        .chunks_exact(4)
+        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]) as f64)
+        .collect();
+    let points: Vec<Vec3> = values.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
+    if points.len() < m {
+        return;
+    }
+    let (prev, cloud) = points.split_at(m);
+    let finite = points.iter().all(|p| p.iter().all(|c| c.is_finite()));
+    let p = Params::default();
+    let visible = upetrack::visibility::visible_nodes(prev, cloud, p.visibility_radius, 3);
+    let mut nodes = prev.to_vec();
+    upetrack::registration::register(cloud, &mut nodes, &visible, &p.em());
+    upetrack::occlusion::estimate_hidden(&mut nodes, &visible, prev, &p.upe());
+    let out = upetrack::resampling::resample_uniform(&nodes, m);
+    assert_eq!(out.len(), m);
+    if finite && out.iter().all(|q| q.iter().all(|c| c.abs() < 1e300)) {
+        // Finite in, finite out (unless magnitudes overflow on the way).
+        assert!(nodes.iter().all(|q| q.iter().all(|c| c.is_finite())) || prev.iter().any(|q| q.norm() > 1e150));
+    }
+});
