@@ -186,6 +186,24 @@ function activeRects(i) {
   return flat;
 }
 
+// File bytes of frame i, read ahead at most one frame.
+const ahead = new Map();
+function prefetch(i) {
+  const seq = state.seq;
+  if (ahead.has(i)) return;
+  ahead.clear();
+  const p = Promise.all([seq.read(seq.info.color_files[i]), seq.read(seq.info.depth_files[i])]);
+  p.catch(() => {});
+  ahead.set(i, { seq, p });
+}
+function readPair(i) {
+  const hit = ahead.get(i);
+  ahead.delete(i);
+  if (hit && hit.seq === state.seq) return hit.p;
+  const seq = state.seq;
+  return Promise.all([seq.read(seq.info.color_files[i]), seq.read(seq.info.depth_files[i])]);
+}
+
 async function requestFrame(i, track) {
   const seq = state.seq;
   const info = seq.info;
@@ -195,8 +213,10 @@ async function requestFrame(i, track) {
   let depth = null;
   const transfer = [];
   if (!seq.fromZip) {
-    [color, depth] = await Promise.all([seq.read(colorName), seq.read(depthName)]);
+    [color, depth] = await readPair(i);
     transfer.push(color, depth);
+    // Read the next frame's files while this one is decoded and tracked.
+    if (i + 1 < info.color_files.length) prefetch(i + 1);
   }
   const gt = info.groundtruth[i];
   return call({
@@ -230,7 +250,7 @@ async function goToNow(i) {
       if (generation !== state.generation) return;
       state.results[k] = {
         nodes: r.nodes, nodesPx: r.nodesPx, visible: r.visible, status: r.status, reason: r.reason,
-        trackMs: r.trackMs, totalMs: r.totalMs, decodeMs: r.decodeMs, error: r.error,
+        trackMs: r.trackMs, totalMs: r.totalMs, decodeMs: r.decodeMs, error: r.error, snapshot: r.snapshot,
       };
       state.tracked = k;
       if (k < i && (k - state.tracked) % 10 === 0) progress(k, i);
@@ -250,7 +270,9 @@ const ctx = canvas.getContext('2d');
 function draw() {
   const f = state.frame;
   if (!f) return;
-  const img = new ImageData(new Uint8ClampedArray(f.rgba), f.width, f.height);
+  const overlay = ($('show-depth').checked && f.depth) || ($('show-mask').checked && f.mask);
+  // Copy only when an overlay will paint over the colour image.
+  const img = new ImageData(overlay ? new Uint8ClampedArray(f.rgba) : f.rgba, f.width, f.height);
   if ($('show-depth').checked && f.depth) {
     let lo = Infinity, hi = 0;
     for (const d of f.depth) if (d) { lo = Math.min(lo, d); hi = Math.max(hi, d); }
@@ -368,10 +390,15 @@ $('timeline').oninput = (e) => { state.playing = false; goTo(Number(e.target.val
 document.addEventListener('keydown', (e) => { if (e.code === 'Space' && e.target === document.body) { e.preventDefault(); play(); } });
 for (const id of ['show-truth', 'show-mask', 'show-depth']) $(id).onchange = () => goTo(state.index);
 
-// Results after the shown frame are dropped when settings change.
+// When settings change, the shown frame and those after it are tracked
+// again: the worker's tracker goes back to its state before the shown frame.
 function invalidateAfterCurrent() {
-  state.results.length = state.index + 1;
-  state.tracked = Math.min(state.tracked, state.index);
+  const keep = Math.min(state.tracked, state.index - 1);
+  if (keep === state.tracked) return;
+  state.results.length = keep + 1;
+  state.tracked = keep;
+  const snapshot = keep >= 0 ? state.results[keep].snapshot : null;
+  state.busy = state.busy.then(() => call({ type: 'restore', snapshot }));
 }
 
 // ---------- parameters ----------
@@ -388,6 +415,7 @@ $('params').onchange = guarded(async () => {
     const r = await call({ type: 'params', params: next });
     state.params = r.params;
     invalidateAfterCurrent();
+    await goTo(state.index);
   } catch (err) {
     setParamInputs(state.params);
     throw err;

@@ -36,8 +36,8 @@ async function handle(m) {
     case 'hsv':
       tracker.setHsv(new Uint8Array(m.lower), new Uint8Array(m.upper));
       return {};
-    case 'reset':
-      tracker.reset();
+    case 'restore':
+      tracker.restore(m.snapshot ?? null);
       return {};
     case 'frame': {
       let color = m.color, depth = m.depth;
@@ -56,7 +56,7 @@ async function handle(m) {
         Object.assign(out, {
           nodes: Array.from(r.nodes), nodesPx: Array.from(r.nodesPx), visible: Array.from(r.visible),
           status: r.status, reason: r.reason ?? null, trackMs: r.track_ms, totalMs: r.total_ms,
-          cloudPoints: r.cloud_points,
+          cloudPoints: r.cloud_points, snapshot: tracker.snapshot(),
         });
         r.free();
         out.error = m.groundtruth ? Array.from(tracker.lastError(new Float64Array(m.groundtruth))) : [];

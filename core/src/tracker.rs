@@ -99,10 +99,20 @@ pub struct Observation {
     pub cloud: Vec<Vec3>,
 }
 
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 struct TrackState {
     nodes: Vec<Vec3>,
     lost: bool,
+}
+
+/// Everything a tracker carries from one frame to the next, to go back to
+/// an earlier frame (the page's timeline) without tracking from the start.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct TrackerSnapshot {
+    state: Option<TrackState>,
+    known_length: Option<f64>,
 }
 
 /// Tracks one rope across the frames of one camera.
@@ -173,6 +183,26 @@ impl Tracker {
         hsv.validate()?;
         self.hsv = hsv;
         Ok(())
+    }
+
+    /// The state after the last frame.
+    pub fn snapshot(&self) -> TrackerSnapshot {
+        TrackerSnapshot {
+            state: self.state.clone(),
+            known_length: self.known_length,
+        }
+    }
+
+    /// Goes back to a state taken by [`Tracker::snapshot`]. A snapshot with
+    /// another node count is resampled to the current one.
+    pub fn restore(&mut self, snapshot: TrackerSnapshot) {
+        self.state = snapshot.state.map(|mut s| {
+            if s.nodes.len() != self.params.node_count && !s.nodes.is_empty() {
+                s.nodes = resample_uniform(&s.nodes, self.params.node_count);
+            }
+            s
+        });
+        self.known_length = snapshot.known_length;
     }
 
     /// Forgets the state: the next frame initialises again.
@@ -345,5 +375,36 @@ fn reason_after_loss(f: ReinitFailure, just_lost: bool) -> LostReason {
 impl From<ReinitFailure> for LostReason {
     fn from(f: ReinitFailure) -> Self {
         reason_after_loss(f, false)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn restore_returns_to_a_snapshot_and_resamples_to_the_node_count() {
+        let cam = CameraIntrinsics::D435I_640X480;
+        let mut t = Tracker::new(Params::default(), cam, HsvRange::default()).expect("tracker");
+        let empty = t.snapshot();
+        let nodes: Vec<Vec3> = (0..24)
+            .map(|i| Vec3::new(i as f64 * 0.01, 0.0, 0.6))
+            .collect();
+        t.state = Some(TrackState {
+            nodes: nodes.clone(),
+            lost: false,
+        });
+        t.known_length = Some(0.23);
+        let snap = t.snapshot();
+        t.reset();
+        assert_eq!(t.snapshot(), empty);
+        t.restore(snap.clone());
+        assert_eq!(t.nodes(), &nodes[..]);
+        assert_eq!(t.snapshot(), snap);
+        let mut p = Params::default();
+        p.node_count = 12;
+        t.set_params(p).expect("params");
+        t.restore(snap);
+        assert_eq!(t.nodes().len(), 12);
     }
 }

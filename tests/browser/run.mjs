@@ -147,6 +147,63 @@ await test('a bad file and a wrong folder show a message and the page keeps work
   await page.close();
 });
 
+await test('dropping a corrupt file or a folder that is not a sequence shows a message', async () => {
+  const page = await newPage('?autoplay=0');
+  const drop = (files) => page.evaluate((files) => {
+    const dt = new DataTransfer();
+    for (const [name, text] of files) dt.items.add(new File([text], name));
+    const stage = document.getElementById('stage');
+    stage.dispatchEvent(new DragEvent('dragover', { dataTransfer: dt, bubbles: true, cancelable: true }));
+    stage.dispatchEvent(new DragEvent('drop', { dataTransfer: dt, bubbles: true, cancelable: true }));
+  }, files);
+  await drop([['broken.zip', 'PK\x03\x04 not really a zip']]);
+  await page.waitForFunction(() => !document.getElementById('message').hidden, null, { timeout: 10000 });
+  const m1 = await messageOf(page);
+  assert(m1.includes('broken.zip'), m1);
+  await page.click('#message-close');
+  await drop([['notes.txt', 'hello'], ['photo.jpg', 'not a photo']]);
+  await page.waitForFunction(() => !document.getElementById('message').hidden, null, { timeout: 10000 });
+  const m2 = await messageOf(page);
+  assert(m2.includes('camera_intrinsic.json'), m2);
+  // The page still plays a sample afterwards.
+  await page.selectOption('#sample', 'static-s');
+  await page.waitForFunction(() => window.upetrack.state.seq && window.upetrack.state.seq.name === 'static-s' && window.upetrack.state.tracked >= 0, null, { timeout: 30000 });
+  await page.close();
+});
+
+await test('benchmark (printed, not asserted): playback rate with decoding and tracking', async () => {
+  const page = await newPage('?autoplay=0&speed=4');
+  const r = await page.evaluate(async () => {
+    const u = window.upetrack;
+    const times = [];
+    const t0 = performance.now();
+    for (let i = 1; i < u.state.seq.info.color_files.length; i++) { await u.goTo(i); times.push(performance.now()); }
+    const per = (times[times.length - 1] - t0) / times.length;
+    const res = u.state.results.slice(1);
+    const med = (xs) => [...xs].sort((a, b) => a - b)[xs.length >> 1];
+    return { perFrame: per, decode: med(res.map((x) => x.decodeMs)), total: med(res.map((x) => x.totalMs)), track: med(res.map((x) => x.trackMs)) };
+  });
+  console.log(`     as fast as possible: ${r.perFrame.toFixed(1)} ms per frame (${(1000 / r.perFrame).toFixed(0)} frames/s) including file reads and drawing; median decode ${r.decode.toFixed(1)} ms, total ${r.total.toFixed(2)} ms, tracking ${r.track.toFixed(2)} ms`);
+  await page.close();
+});
+
+await test('going back on the timeline and changing a setting re-tracks from that frame', async () => {
+  const page = await newPage('?sample=dynamic-pull&autoplay=0');
+  const same = await page.evaluate(async () => {
+    const u = window.upetrack;
+    const first = (await u.trackAll()).frames.map((f) => f.nodes);
+    await u.goTo(5);
+    // Setting the same parameters again re-tracks frames 5.. from frame 4's state.
+    document.getElementById('params').dispatchEvent(new Event('change'));
+    await new Promise((r) => setTimeout(r, 200));
+    await u.state.busy;
+    const again = (await u.trackAll()).frames.map((f) => f.nodes);
+    return JSON.stringify(first) === JSON.stringify(again);
+  });
+  assert(same, 're-tracked frames differ from the first pass');
+  await page.close();
+});
+
 await test('a drawn occlusion hides nodes, which are still estimated near the truth', async () => {
   const page = await newPage('?sample=dynamic-pull&autoplay=0');
   // Cover the upper bend of the S (not occluded by the sample itself) from frame 3 on.

@@ -141,6 +141,23 @@ impl WasmTracker {
             .map_err(js_err)
     }
 
+    /// The state after the last frame, to return to it with `restore`.
+    pub fn snapshot(&self) -> Result<JsValue, JsError> {
+        serde_wasm_bindgen::to_value(&self.tracker.snapshot()).map_err(js_err)
+    }
+
+    /// Goes back to a state from `snapshot` (`null`: the initial state).
+    pub fn restore(&mut self, snapshot: JsValue) -> Result<(), JsError> {
+        if snapshot.is_null() || snapshot.is_undefined() {
+            self.tracker.reset();
+            return Ok(());
+        }
+        let s: upetrack::tracker::TrackerSnapshot =
+            serde_wasm_bindgen::from_value(snapshot).map_err(js_err)?;
+        self.tracker.restore(s);
+        Ok(())
+    }
+
     /// Forgets the state; the next frame initialises.
     pub fn reset(&mut self) {
         self.tracker.reset();
