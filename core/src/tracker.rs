@@ -401,8 +401,10 @@ mod tests {
         t.restore(snap.clone());
         assert_eq!(t.nodes(), &nodes[..]);
         assert_eq!(t.snapshot(), snap);
-        let mut p = Params::default();
-        p.node_count = 12;
+        let p = Params {
+            node_count: 12,
+            ..Params::default()
+        };
         t.set_params(p).expect("params");
         t.restore(snap);
         assert_eq!(t.nodes().len(), 12);
