@@ -38,6 +38,8 @@ const state = {
   mode: 'none',       // 'draw' | 'pick'
   shownAt: [],        // display timestamps, for the frame rate
   generation: 0,      // bumped when a new sequence opens
+  epoch: 0,           // bumped when settings change; a look-ahead from an older epoch is dropped
+  lookahead: null,    // { index, epoch, generation, promise } of the next frame, while playing
 };
 
 // ---------- messages and progress ----------
@@ -246,13 +248,23 @@ async function goToNow(i) {
     r = await requestFrame(i, false);
   } else {
     for (let k = state.tracked + 1; k <= i; k++) {
-      r = await requestFrame(k, true);
+      const look = state.lookahead;
+      state.lookahead = null;
+      const usable = look && look.index === k && look.epoch === state.epoch && look.generation === generation;
+      r = await (usable ? look.promise : requestFrame(k, true));
       if (generation !== state.generation) return;
       state.results[k] = {
         nodes: r.nodes, nodesPx: r.nodesPx, visible: r.visible, status: r.status, reason: r.reason,
         trackMs: r.trackMs, totalMs: r.totalMs, decodeMs: r.decodeMs, error: r.error, snapshot: r.snapshot,
       };
       state.tracked = k;
+      // While playing, the next frame is requested before this one is drawn,
+      // so that the worker decodes and tracks while the page draws.
+      if (state.playing && k === i && k + 1 < n) {
+        const promise = requestFrame(k + 1, true);
+        promise.catch(() => {});
+        state.lookahead = { index: k + 1, epoch: state.epoch, generation, promise };
+      }
       if (k < i && (k - state.tracked) % 10 === 0) progress(k, i);
     }
     progress(null);
@@ -393,8 +405,9 @@ for (const id of ['show-truth', 'show-mask', 'show-depth']) $(id).onchange = () 
 // When settings change, the shown frame and those after it are tracked
 // again: the worker's tracker goes back to its state before the shown frame.
 function invalidateAfterCurrent() {
+  state.epoch++;
   const keep = Math.min(state.tracked, state.index - 1);
-  if (keep === state.tracked) return;
+  if (keep === state.tracked && !state.lookahead) return;
   state.results.length = keep + 1;
   state.tracked = keep;
   const snapshot = keep >= 0 ? state.results[keep].snapshot : null;
