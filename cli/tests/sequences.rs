@@ -22,6 +22,11 @@ fn upetrack() -> std::process::Command {
     std::process::Command::new(env!("CARGO_BIN_EXE_upetrack"))
 }
 
+/// Runs the command with `args` and returns its output.
+fn run(args: &[&str]) -> std::process::Output {
+    upetrack().args(args).output().expect("run upetrack")
+}
+
 fn synth(scenario: &str, frames: usize, dir: &std::path::Path) {
     let out = upetrack()
         .args([
@@ -163,15 +168,12 @@ fn track_command_writes_every_frame_of_the_contract() {
     let dir = temp_dir("cli");
     synth("static-s", 8, &dir);
     let out_json = dir.join("result.json");
-    let out = upetrack()
-        .args([
-            "track",
-            dir.to_str().expect("utf-8"),
-            "--out",
-            out_json.to_str().expect("utf-8"),
-        ])
-        .output()
-        .expect("run");
+    let out = run(&[
+        "track",
+        dir.to_str().expect("utf-8"),
+        "--out",
+        out_json.to_str().expect("utf-8"),
+    ]);
     assert!(
         out.status.success(),
         "{}",
@@ -216,10 +218,7 @@ fn bad_sequences_fail_with_the_file_named_and_a_nonzero_exit() {
     let depth = dir.join("depth/000001.png");
     let bytes = std::fs::read(&depth).expect("read");
     std::fs::write(&depth, &bytes[..bytes.len() / 2]).expect("write");
-    let out = upetrack()
-        .args(["track", dir.to_str().expect("utf-8"), "--out", "/dev/null"])
-        .output()
-        .expect("run");
+    let out = run(&["track", dir.to_str().expect("utf-8"), "--out", "/dev/null"]);
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
@@ -233,10 +232,7 @@ fn bad_sequences_fail_with_the_file_named_and_a_nonzero_exit() {
         r#"{"width":640,"height":480,"intrinsic_matrix":[0,0,0,0,615,0,320,240,1]}"#,
     )
     .expect("write");
-    let out = upetrack()
-        .args(["track", dir.to_str().expect("utf-8"), "--out", "/dev/null"])
-        .output()
-        .expect("run");
+    let out = run(&["track", dir.to_str().expect("utf-8"), "--out", "/dev/null"]);
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
@@ -245,25 +241,19 @@ fn bad_sequences_fail_with_the_file_named_and_a_nonzero_exit() {
     );
 
     // Missing folder.
-    let out = upetrack()
-        .args(["track", "/nonexistent/seq", "--out", "/dev/null"])
-        .output()
-        .expect("run");
+    let out = run(&["track", "/nonexistent/seq", "--out", "/dev/null"]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("/nonexistent/seq"));
 
     // Parameters out of range.
     let p = dir.join("params.json");
     std::fs::write(&p, r#"{"node_count": 2}"#).expect("write");
-    let out = upetrack()
-        .args([
-            "eval",
-            dir.to_str().expect("utf-8"),
-            "--params",
-            p.to_str().expect("utf-8"),
-        ])
-        .output()
-        .expect("run");
+    let out = run(&[
+        "eval",
+        dir.to_str().expect("utf-8"),
+        "--params",
+        p.to_str().expect("utf-8"),
+    ]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("node_count"));
     let _ = std::fs::remove_dir_all(&dir);

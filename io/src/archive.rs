@@ -29,12 +29,12 @@ pub fn unpack_zip(bytes: &[u8], name: &str) -> Result<MemorySource, SequenceErro
     let mut archive = zip::ZipArchive::new(std::io::Cursor::new(bytes))
         .map_err(|e| invalid(format!("not a readable zip archive: {e}")))?;
     if archive.len() > MAX_ARCHIVE_ENTRIES {
-        return Err(SequenceError::TooLarge {
-            path: name.to_string(),
-            what: "number of archive entries",
-            actual: archive.len() as u64,
-            limit: MAX_ARCHIVE_ENTRIES as u64,
-        });
+        return Err(SequenceError::too_large(
+            name.to_string(),
+            "number of archive entries",
+            archive.len() as u64,
+            MAX_ARCHIVE_ENTRIES as u64,
+        ));
     }
     // Declared sizes first: nothing is unpacked if the total is too large.
     let mut total = 0u64;
@@ -55,12 +55,12 @@ pub fn unpack_zip(bytes: &[u8], name: &str) -> Result<MemorySource, SequenceErro
         }
     }
     if total > MAX_ARCHIVE_BYTES {
-        return Err(SequenceError::TooLarge {
-            path: name.to_string(),
-            what: "unpacked size in bytes",
-            actual: total,
-            limit: MAX_ARCHIVE_BYTES,
-        });
+        return Err(SequenceError::too_large(
+            name.to_string(),
+            "unpacked size in bytes",
+            total,
+            MAX_ARCHIVE_BYTES,
+        ));
     }
     let mut source = MemorySource::new(name);
     for i in 0..archive.len() {

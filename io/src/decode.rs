@@ -36,12 +36,12 @@ fn check_size(path: &str, width: u32, height: u32) -> Result<(), SequenceError> 
     }
     let side = width.max(height);
     if side > MAX_IMAGE_SIDE {
-        return Err(SequenceError::TooLarge {
-            path: path.to_string(),
-            what: "image side in pixels",
-            actual: side as u64,
-            limit: MAX_IMAGE_SIDE as u64,
-        });
+        return Err(SequenceError::too_large(
+            path.to_string(),
+            "image side in pixels",
+            side as u64,
+            MAX_IMAGE_SIDE as u64,
+        ));
     }
     Ok(())
 }

@@ -59,6 +59,20 @@ pub enum SequenceError {
 }
 
 impl SequenceError {
+    pub(crate) fn too_large(
+        path: impl Into<String>,
+        what: &'static str,
+        actual: u64,
+        limit: u64,
+    ) -> Self {
+        Self::TooLarge {
+            path: path.into(),
+            what,
+            actual,
+            limit,
+        }
+    }
+
     pub(crate) fn invalid(path: &str, message: impl Into<String>) -> Self {
         Self::Invalid {
             path: path.to_string(),

@@ -178,12 +178,12 @@ fn read_json<T: serde::de::DeserializeOwned, S: Source>(
 ) -> Result<T, SequenceError> {
     let bytes = source.read(path)?;
     if bytes.len() > MAX_JSON_BYTES {
-        return Err(SequenceError::TooLarge {
-            path: source.display(path),
-            what: "JSON size in bytes",
-            actual: bytes.len() as u64,
-            limit: MAX_JSON_BYTES as u64,
-        });
+        return Err(SequenceError::too_large(
+            source.display(path),
+            "JSON size in bytes",
+            bytes.len() as u64,
+            MAX_JSON_BYTES as u64,
+        ));
     }
     serde_json::from_slice(&bytes).map_err(|e| SequenceError::Json {
         path: source.display(path),
@@ -206,12 +206,12 @@ fn sorted_files<S: Source>(
         .collect();
     names.sort();
     if names.len() > MAX_FRAMES {
-        return Err(SequenceError::TooLarge {
-            path: source.display(dir),
-            what: "number of frames",
-            actual: names.len() as u64,
-            limit: MAX_FRAMES as u64,
-        });
+        return Err(SequenceError::too_large(
+            source.display(dir),
+            "number of frames",
+            names.len() as u64,
+            MAX_FRAMES as u64,
+        ));
     }
     Ok(names.into_iter().map(|n| format!("{dir}/{n}")).collect())
 }
@@ -292,12 +292,12 @@ impl<S: Source> Sequence<S> {
             None => HsvRange::default(),
         };
         if config.occlusions.len() > MAX_OCCLUSIONS {
-            return Err(SequenceError::TooLarge {
-                path: dlo_path,
-                what: "number of occlusions",
-                actual: config.occlusions.len() as u64,
-                limit: MAX_OCCLUSIONS as u64,
-            });
+            return Err(SequenceError::too_large(
+                dlo_path,
+                "number of occlusions",
+                config.occlusions.len() as u64,
+                MAX_OCCLUSIONS as u64,
+            ));
         }
         for (i, o) in config.occlusions.iter().enumerate() {
             if o.frames[0] > o.frames[1] {
@@ -356,12 +356,12 @@ impl<S: Source> Sequence<S> {
             let gt_path = source.display(&gt_name);
             for f in gt.frames {
                 if f.points.len() > MAX_GROUNDTRUTH_POINTS {
-                    return Err(SequenceError::TooLarge {
-                        path: gt_path,
-                        what: "ground-truth points in one frame",
-                        actual: f.points.len() as u64,
-                        limit: MAX_GROUNDTRUTH_POINTS as u64,
-                    });
+                    return Err(SequenceError::too_large(
+                        gt_path,
+                        "ground-truth points in one frame",
+                        f.points.len() as u64,
+                        MAX_GROUNDTRUTH_POINTS as u64,
+                    ));
                 }
                 if f.points.iter().flatten().any(|c| !c.is_finite()) {
                     return Err(SequenceError::invalid(

@@ -79,12 +79,12 @@ impl Source for FolderSource {
         };
         let len = std::fs::metadata(&p).map_err(io)?.len();
         if len > MAX_FILE_BYTES {
-            return Err(SequenceError::TooLarge {
-                path: p.display().to_string(),
-                what: "file size in bytes",
-                actual: len,
-                limit: MAX_FILE_BYTES,
-            });
+            return Err(SequenceError::too_large(
+                p.display().to_string(),
+                "file size in bytes",
+                len,
+                MAX_FILE_BYTES,
+            ));
         }
         std::fs::read(&p).map_err(io)
     }
@@ -236,12 +236,12 @@ pub fn open_path(path: &std::path::Path) -> Result<Box<dyn Source>, SequenceErro
         })?
         .len();
     if len > crate::archive::MAX_ARCHIVE_BYTES {
-        return Err(SequenceError::TooLarge {
-            path: shown,
-            what: "archive size in bytes",
-            actual: len,
-            limit: crate::archive::MAX_ARCHIVE_BYTES,
-        });
+        return Err(SequenceError::too_large(
+            shown,
+            "archive size in bytes",
+            len,
+            crate::archive::MAX_ARCHIVE_BYTES,
+        ));
     }
     let bytes = std::fs::read(path).map_err(|source| SequenceError::Io {
         path: shown.clone(),
