@@ -52,7 +52,7 @@ async function handle(m) {
       const out = { index: m.index, width: f.width, height: f.height, decodeMs, rgba: rgba.buffer };
       const transfer = [rgba.buffer];
       if (m.track) {
-        const r = tracker.track(f.width, f.height, f.rgb, f.depth, m.depthScale, new Int32Array(m.occlusions));
+        const r = tracker.trackDecoded(f, m.depthScale, new Int32Array(m.occlusions));
         Object.assign(out, {
           nodes: Array.from(r.nodes), nodesPx: Array.from(r.nodesPx), visible: Array.from(r.visible),
           status: r.status, reason: r.reason ?? null, trackMs: r.track_ms, totalMs: r.total_ms,

@@ -217,6 +217,25 @@ impl WasmTracker {
         Ok(result)
     }
 
+    /// Tracks a frame decoded by `decodeFrame` without copying its images
+    /// out of and back into WebAssembly memory.
+    #[wasm_bindgen(js_name = trackDecoded)]
+    pub fn track_decoded(
+        &mut self,
+        frame: &DecodedFrame,
+        depth_scale: f64,
+        occlusions: &[i32],
+    ) -> Result<FrameResult, JsError> {
+        self.track(
+            frame.width,
+            frame.height,
+            &frame.rgb,
+            &frame.depth,
+            depth_scale,
+            occlusions,
+        )
+    }
+
     /// The last frame's mask, one byte per pixel (1 rope).
     #[wasm_bindgen(js_name = lastMask)]
     pub fn last_mask(&self) -> Vec<u8> {
