@@ -247,7 +247,8 @@ async function goToNow(i) {
   if (i <= state.tracked) {
     r = await requestFrame(i, false);
   } else {
-    for (let k = state.tracked + 1; k <= i; k++) {
+    const from = state.tracked + 1;
+    for (let k = from; k <= i; k++) {
       const look = state.lookahead;
       state.lookahead = null;
       const usable = look && look.index === k && look.epoch === state.epoch && look.generation === generation;
@@ -265,7 +266,7 @@ async function goToNow(i) {
         promise.catch(() => {});
         state.lookahead = { index: k + 1, epoch: state.epoch, generation, promise };
       }
-      if (k < i && (k - state.tracked) % 10 === 0) progress(k, i);
+      if (k < i && (k - from) % 10 === 9) progress(k - from, i - from);
     }
     progress(null);
   }

@@ -5,7 +5,7 @@ mod bench;
 mod overlay;
 mod synth;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::ExitCode;
 use std::time::Instant;
 
@@ -286,10 +286,4 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
-}
-
-/// Output folder helper shared by subcommands.
-fn ensure_dir(p: &Path) -> Result<PathBuf, CliError> {
-    std::fs::create_dir_all(p).map_err(|e| CliError(format!("{}: {e}", p.display())))?;
-    Ok(p.to_path_buf())
 }

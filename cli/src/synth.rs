@@ -11,7 +11,7 @@ use upetrack_io::sequence::{
 use upetrack_io::write::{encode_depth_png, encode_jpeg, write_file, write_json, JPEG_QUALITY};
 use upetrack_synth::{RenderSettings, Scenario, ScenarioKind};
 
-use crate::{ensure_dir, Args, CliError, USAGE};
+use crate::{Args, CliError, USAGE};
 
 /// Prints every scenario with its description.
 pub fn list_scenarios() {
@@ -36,7 +36,6 @@ const D435I_1280X720: CameraIntrinsics = CameraIntrinsics {
 
 /// Writes `scenario` into `dir`; returns the number of frames written.
 pub fn write_scenario(mut scenario: Scenario, dir: &Path) -> Result<usize, CliError> {
-    ensure_dir(dir)?;
     let camera = scenario.camera();
     write_json(
         &dir.join("camera_intrinsic.json"),

@@ -94,9 +94,10 @@ pub fn register(
     active: &[bool],
     settings: &EmSettings,
 ) -> EmReport {
-    let idx: Vec<usize> = (0..nodes.len())
-        .filter(|&m| active.get(m).copied().unwrap_or(false) && math::is_finite(&nodes[m]))
+    let participating: Vec<bool> = (0..nodes.len())
+        .map(|m| active.get(m).copied().unwrap_or(false) && math::is_finite(&nodes[m]))
         .collect();
+    let idx: Vec<usize> = (0..nodes.len()).filter(|&m| participating[m]).collect();
     let mut variance = settings.min_variance;
     if idx.is_empty() || cloud.is_empty() {
         return EmReport {
@@ -105,7 +106,6 @@ pub fn register(
             converged: true,
         };
     }
-    let participating: Vec<bool> = (0..nodes.len()).map(|m| idx.contains(&m)).collect();
     variance = initial_variance(cloud, nodes, &participating, settings.min_variance);
     let k = idx.len();
     let n = cloud.len() as f64;

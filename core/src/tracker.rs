@@ -227,21 +227,14 @@ impl Tracker {
     /// that cannot be tracked is reported as lost and the state is kept.
     pub fn update(&mut self, frame: &Frame<'_>, obs: &Observation) -> FrameOutput {
         let Some(state) = self.state.as_ref() else {
-            return match self.try_initialise(frame, obs) {
-                Ok(out) => out,
-                Err(ReinitFailure::Init(e)) => self.lost(LostReason::NotInitialised(e)),
-                Err(other) => self.lost(other.into()),
-            };
+            return self.initialise_or_lose(frame, obs, Loss::NeverInitialised);
         };
         if state.lost {
-            return match self.try_initialise(frame, obs) {
-                Ok(out) => out,
-                Err(reason) => self.lost(reason_after_loss(reason, false)),
-            };
+            return self.initialise_or_lose(frame, obs, Loss::StillLost);
         }
 
-        let p = &self.params;
         let prev = state.nodes.clone();
+        let p = &self.params;
         let visible = visible_nodes_relative(
             &prev,
             &obs.cloud,
@@ -250,15 +243,7 @@ impl Tracker {
             p.visibility_min_fraction,
         );
         if !visible.iter().any(|&v| v) {
-            return match self.try_initialise(frame, obs) {
-                Ok(out) => out,
-                Err(reason) => {
-                    if let Some(s) = self.state.as_mut() {
-                        s.lost = true;
-                    }
-                    self.lost(reason_after_loss(reason, true))
-                }
-            };
+            return self.initialise_or_lose(frame, obs, Loss::JustLost);
         }
         // Few nodes left on the rope: it may have jumped. A full-length rope
         // in view replaces the state; otherwise tracking goes on.
@@ -338,6 +323,25 @@ impl Tracker {
         })
     }
 
+    /// Initialises from this frame, or reports it lost (holding the nodes
+    /// and marking the state lost, so that later frames keep trying).
+    fn initialise_or_lose(
+        &mut self,
+        frame: &Frame<'_>,
+        obs: &Observation,
+        loss: Loss,
+    ) -> FrameOutput {
+        match self.try_initialise(frame, obs) {
+            Ok(out) => out,
+            Err(failure) => {
+                if let Some(s) = self.state.as_mut() {
+                    s.lost = true;
+                }
+                self.lost(loss.reason(failure))
+            }
+        }
+    }
+
     fn lost(&self, reason: LostReason) -> FrameOutput {
         let nodes = self.nodes().to_vec();
         FrameOutput {
@@ -361,20 +365,25 @@ enum ReinitFailure {
     Short { found: f64, known: f64 },
 }
 
-fn reason_after_loss(f: ReinitFailure, just_lost: bool) -> LostReason {
-    match f {
-        ReinitFailure::Init(e) if just_lost => LostReason::NoVisibleNodes(e),
-        ReinitFailure::Init(e) => LostReason::StillLost(e),
-        ReinitFailure::Short { found, known } => LostReason::PartlyInView {
-            found_mm: found * 1000.0,
-            known_mm: known * 1000.0,
-        },
-    }
+/// Where the tracker stood when (re)initialisation was attempted.
+#[derive(Clone, Copy)]
+enum Loss {
+    NeverInitialised,
+    JustLost,
+    StillLost,
 }
 
-impl From<ReinitFailure> for LostReason {
-    fn from(f: ReinitFailure) -> Self {
-        reason_after_loss(f, false)
+impl Loss {
+    fn reason(self, f: ReinitFailure) -> LostReason {
+        match (self, f) {
+            (Loss::NeverInitialised, ReinitFailure::Init(e)) => LostReason::NotInitialised(e),
+            (Loss::JustLost, ReinitFailure::Init(e)) => LostReason::NoVisibleNodes(e),
+            (_, ReinitFailure::Init(e)) => LostReason::StillLost(e),
+            (_, ReinitFailure::Short { found, known }) => LostReason::PartlyInView {
+                found_mm: found * 1000.0,
+                known_mm: known * 1000.0,
+            },
+        }
     }
 }
 

@@ -121,6 +121,11 @@ impl MemorySource {
         self.files.insert(clean.join("/"), bytes);
     }
 
+    /// Every file path, sorted.
+    pub fn paths(&self) -> impl Iterator<Item = &str> {
+        self.files.keys().map(String::as_str)
+    }
+
     /// Number of files.
     pub fn len(&self) -> usize {
         self.files.len()

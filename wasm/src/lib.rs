@@ -343,19 +343,7 @@ impl Archive {
 
     /// Every file path inside.
     pub fn names(&self) -> Vec<String> {
-        let mut out = Vec::new();
-        let mut dirs = vec![String::new()];
-        while let Some(d) = dirs.pop() {
-            for n in self.source.list(&d).unwrap_or_default() {
-                out.push(if d.is_empty() { n } else { format!("{d}/{n}") });
-            }
-            for sub in ["color", "rgb", "image", "depth"] {
-                if d.is_empty() && self.source.is_dir(sub) {
-                    dirs.push(sub.to_string());
-                }
-            }
-        }
-        out
+        self.source.paths().map(str::to_string).collect()
     }
 
     /// The bytes of one file.
