@@ -22,15 +22,17 @@ function call(msg, transfer = []) {
 }
 
 const PARAM_FIELDS = ['node_count', 'displacement_decay', 'curvature_retention', 'bending_resistance',
-  'displacement_weight', 'visibility_radius', 'visibility_min_points'];
+  'displacement_weight', 'end_displacement_weight', 'visibility_radius', 'visibility_min_points'];
 const MM_FIELDS = new Set(['visibility_radius']);
+const ALGORITHM_NAMES = { upetrack: 'UPETrack', cpd: 'CPD', trackdlo: 'TrackDLO' };
 
 const state = {
   seq: null,          // { name, info, read(path), fromZip }
   index: 0,           // frame shown
   tracked: -1,        // last frame tracked (frames are tracked in order)
   results: [],        // per frame: { nodes, nodesPx, visible, status, reason, trackMs, totalMs, error }
-  params: null,       // parameters in force (all fields)
+  params: null,       // parameters in force (all fields, with the algorithm)
+  compare: '',        // algorithm tracked alongside for comparison ('' for none)
   userRects: [],      // [x, y, w, h] drawn on the image
   playing: false,
   busy: Promise.resolve(),
@@ -70,7 +72,7 @@ async function openSequence(name, paths, read, fromZip = false) {
   }
   const images = paths.filter((p) => /^(color|rgb|image|depth)\/[^/]+$/i.test(p));
   const { info } = await call({ type: 'info', name, json, images });
-  await call({ type: 'open', camera: info.camera, params: state.params, hsv: info.hsv });
+  await call({ type: 'open', camera: info.camera, params: state.params, hsv: info.hsv, compare: state.compare });
   if (generation !== state.generation) return;
   state.seq = { name, info, read, fromZip };
   state.index = 0;
@@ -257,6 +259,7 @@ async function goToNow(i) {
       state.results[k] = {
         nodes: r.nodes, nodesPx: r.nodesPx, visible: r.visible, status: r.status, reason: r.reason,
         trackMs: r.trackMs, totalMs: r.totalMs, decodeMs: r.decodeMs, error: r.error, snapshot: r.snapshot,
+        second: r.second || null,
       };
       state.tracked = k;
       // While playing, the next frame is requested before this one is drawn,
@@ -321,20 +324,28 @@ function draw() {
     ctx.stroke();
   }
   const res = state.results[i];
-  if (res && res.nodesPx.length) {
-    const p = res.nodesPx;
-    ctx.strokeStyle = '#ffffff'; ctx.lineWidth = 2; ctx.beginPath();
-    for (let k = 0; k < p.length; k += 2) { if (k === 0) ctx.moveTo(p[k], p[k + 1]); else ctx.lineTo(p[k], p[k + 1]); }
-    ctx.stroke();
-    for (let k = 0; k < p.length / 2; k++) {
-      ctx.beginPath(); ctx.arc(p[2 * k], p[2 * k + 1], 4, 0, 2 * Math.PI);
-      if (res.visible[k]) { ctx.fillStyle = '#e02020'; ctx.fill(); } else { ctx.lineWidth = 2.5; ctx.strokeStyle = '#ffd000'; ctx.stroke(); }
-    }
-  }
+  if (res && res.second) drawNodes(res.second, COMPARED_COLOURS);
+  if (res) drawNodes(res, MAIN_COLOURS);
   state.shownAt.push(performance.now());
   if (state.shownAt.length > 30) state.shownAt.shift();
   updateLabels();
   drawPlot();
+}
+
+// Node colours: line, visible node, hidden node, error curve.
+const MAIN_COLOURS = { line: '#ffffff', visible: '#e02020', hidden: '#ffd000', curve: '#d02020' };
+const COMPARED_COLOURS = { line: '#b8f4ff', visible: '#00e0ff', hidden: '#ff4fd8', curve: '#0098b8' };
+
+function drawNodes(res, colours) {
+  const p = res.nodesPx;
+  if (!p.length) return;
+  ctx.strokeStyle = colours.line; ctx.lineWidth = 2; ctx.beginPath();
+  for (let k = 0; k < p.length; k += 2) { if (k === 0) ctx.moveTo(p[k], p[k + 1]); else ctx.lineTo(p[k], p[k + 1]); }
+  ctx.stroke();
+  for (let k = 0; k < p.length / 2; k++) {
+    ctx.beginPath(); ctx.arc(p[2 * k], p[2 * k + 1], 4, 0, 2 * Math.PI);
+    if (res.visible[k]) { ctx.fillStyle = colours.visible; ctx.fill(); } else { ctx.lineWidth = 2.5; ctx.strokeStyle = colours.hidden; ctx.stroke(); }
+  }
 }
 
 function mean(xs) { return xs.length ? xs.reduce((a, b) => a + b, 0) / xs.length : NaN; }
@@ -352,8 +363,13 @@ function updateLabels() {
     `sequence ${state.seq.name}   frame ${state.index}   status ${r ? r.status : '-'}${r && r.reason ? ` (${r.reason})` : ''}`,
     r ? `tracking ${r.trackMs.toFixed(2)} ms   segmentation+cloud+tracking ${r.totalMs.toFixed(2)} ms   decoding ${r.decodeMs.toFixed(1)} ms   median tracking ${median(tracked.map((x) => x.trackMs)).toFixed(2)} ms` : '',
     `display ${Number.isFinite(fps) ? fps.toFixed(1) : '-'} frames/s   visible nodes ${r ? r.visible.filter((v) => v).length : '-'} of ${r ? r.visible.length : '-'}`,
-    r && r.error.length ? `frame error ${r.error[0].toFixed(2)} mm, ${r.error[1].toFixed(2)} px` : 'no ground truth for this frame',
+    r && r.error.length ? `frame error ${r.error[0].toFixed(2)} mm, ${r.error[1].toFixed(2)} px (${ALGORITHM_NAMES[state.params.algorithm]}, red)` : 'no ground truth for this frame',
   ];
+  const c = r && r.second;
+  if (c) {
+    const err = c.error.length ? `frame error ${c.error[0].toFixed(2)} mm, ${c.error[1].toFixed(2)} px` : 'no ground truth';
+    lines.push(`compared: ${ALGORITHM_NAMES[state.compare]} (cyan): ${err}   tracking ${c.trackMs.toFixed(2)} ms   status ${c.status}   median tracking ${median(tracked.filter((x) => x.second).map((x) => x.second.trackMs)).toFixed(2)} ms`);
+  }
   $('stats').textContent = lines.join('\n');
 }
 
@@ -362,21 +378,33 @@ function drawPlot() {
   const g = c.getContext('2d');
   g.clearRect(0, 0, c.width, c.height);
   const n = state.seq.info.color_files.length;
-  const errs = state.results.map((r, k) => (r && r.error.length ? [k, r.error[0]] : null)).filter(Boolean);
-  if (!errs.length) { $('plot-label').textContent = 'Frame error: the sequence has no ground truth.'; return; }
-  const ymax = Math.max(10, ...errs.map((e) => e[1])) * 1.1;
+  const series = [{ name: state.params.algorithm, colours: MAIN_COLOURS, of: (r) => r }];
+  if (state.compare) series.push({ name: state.compare, colours: COMPARED_COLOURS, of: (r) => r.second });
+  for (const s of series) {
+    s.errs = state.results.map((r, k) => {
+      const x = r && s.of(r);
+      return x && x.error.length ? [k, x.error[0], x.error[1]] : null;
+    }).filter(Boolean);
+  }
+  const all = series.flatMap((s) => s.errs);
+  if (!all.length) { $('plot-label').textContent = 'Frame error: the sequence has no ground truth.'; return; }
+  const ymax = Math.max(10, ...all.map((e) => e[1])) * 1.1;
   const x = (k) => 30 + (k / Math.max(1, n - 1)) * (c.width - 40);
   const y = (v) => c.height - 15 - (v / ymax) * (c.height - 25);
   g.strokeStyle = '#ccc'; g.fillStyle = '#666'; g.font = '10px sans-serif';
   for (const t of [0, ymax / 2, ymax]) { g.beginPath(); g.moveTo(30, y(t)); g.lineTo(c.width - 10, y(t)); g.stroke(); g.fillText(t.toFixed(0), 2, y(t) + 3); }
-  g.strokeStyle = '#2458c6'; g.lineWidth = 1.5; g.beginPath();
-  errs.forEach(([k, v], j) => (j ? g.lineTo(x(k), y(v)) : g.moveTo(x(k), y(v))));
-  g.stroke();
-  const m = mean(errs.map((e) => e[1]));
-  g.strokeStyle = '#e08000'; g.setLineDash([4, 3]); g.beginPath(); g.moveTo(30, y(m)); g.lineTo(c.width - 10, y(m)); g.stroke(); g.setLineDash([]);
+  const labels = [];
+  for (const s of series) {
+    if (!s.errs.length) continue;
+    g.strokeStyle = s.colours.curve; g.lineWidth = 1.5; g.beginPath();
+    s.errs.forEach(([k, v], j) => (j ? g.lineTo(x(k), y(v)) : g.moveTo(x(k), y(v))));
+    g.stroke();
+    const m = mean(s.errs.map((e) => e[1]));
+    g.setLineDash([4, 3]); g.beginPath(); g.moveTo(30, y(m)); g.lineTo(c.width - 10, y(m)); g.stroke(); g.setLineDash([]);
+    labels.push(`${ALGORITHM_NAMES[s.name]} mean ${m.toFixed(2)} mm, ${mean(s.errs.map((e) => e[2])).toFixed(2)} px over ${s.errs.length} frames`);
+  }
   g.strokeStyle = '#000'; g.beginPath(); g.moveTo(x(state.index), 5); g.lineTo(x(state.index), c.height - 15); g.stroke();
-  const px = mean(state.results.filter((r) => r && r.error.length).map((r) => r.error[1]));
-  $('plot-label').textContent = `Frame error (mm) over time; mean ${m.toFixed(2)} mm, ${px.toFixed(2)} px over ${errs.length} frames.`;
+  $('plot-label').textContent = `Frame error (mm) over time (dashed: means). ${labels.join('; ')}.`;
 }
 
 // ---------- playback ----------
@@ -435,12 +463,33 @@ $('params').onchange = guarded(async () => {
     throw err;
   }
 });
+function hsvInputs() {
+  return { lower: ['h', 's', 'v'].map((c) => Number($(`${c}-lo`).value)), upper: ['h', 's', 'v'].map((c) => Number($(`${c}-hi`).value)) };
+}
+// A new algorithm (or compared one) tracks the sequence again from the start.
+$('algorithms').onchange = guarded(async () => {
+  state.params = { ...state.params, algorithm: $('algorithm').value };
+  state.compare = $('compare').value;
+  if (!state.seq) return;
+  state.playing = false;
+  updatePlayButton();
+  state.generation++;
+  state.epoch++;
+  const seq = state.seq;
+  state.busy = state.busy.then(async () => {
+    await call({ type: 'open', camera: seq.info.camera, params: state.params, hsv: hsvInputs(), compare: state.compare });
+    state.results = [];
+    state.tracked = -1;
+    state.lookahead = null;
+  });
+  await state.busy;
+  await goTo(state.index);
+});
 function setHsvInputs(h) {
   ['h', 's', 'v'].forEach((c, k) => { $(`${c}-lo`).value = h.lower[k]; $(`${c}-hi`).value = h.upper[k]; });
 }
 $('hsv').onchange = guarded(async () => {
-  const lower = ['h', 's', 'v'].map((c) => Number($(`${c}-lo`).value));
-  const upper = ['h', 's', 'v'].map((c) => Number($(`${c}-hi`).value));
+  const { lower, upper } = hsvInputs();
   await call({ type: 'hsv', lower, upper });
   invalidateAfterCurrent();
   await goTo(state.index);
@@ -520,7 +569,7 @@ $('clear-rects').onclick = () => { state.userRects = []; renderRects(); invalida
 // ---------- export ----------
 function resultJson() {
   return {
-    algorithm: 'upetrack',
+    algorithm: state.params.algorithm,
     params: state.params,
     frames: state.results.slice(0, state.tracked + 1).map((r, k) => {
       const f = { frame: k, nodes: [], visible: r.visible.map((v) => v === 1), track_ms: r.trackMs, total_ms: r.totalMs };
@@ -552,6 +601,10 @@ $('embed-snippet').textContent =
 async function start() {
   const { params } = await call({ type: 'defaults' });
   for (const [k, v] of query) if (k.startsWith('p.') && k.slice(2) in params) params[k.slice(2)] = Number(v);
+  if (query.get('algorithm') in ALGORITHM_NAMES) params.algorithm = query.get('algorithm');
+  if (query.get('compare') in ALGORITHM_NAMES) state.compare = query.get('compare');
+  $('algorithm').value = params.algorithm;
+  $('compare').value = state.compare;
   state.params = params;
   setParamInputs(params);
   if (query.has('speed')) $('speed').value = query.get('speed');

@@ -4,7 +4,22 @@ import init, { WasmTracker, decodeFrame, Archive, readSequenceInfo, defaultParam
 
 const ready = init();
 let tracker = null;
+let second = null;          // the tracker of the compared algorithm, if any
+let secondAlgorithm = null;
 let archive = null;
+
+// One tracker's result on a decoded frame, with its error against the truth.
+function track(t, f, m) {
+  const r = t.trackDecoded(f, m.depthScale, new Int32Array(m.occlusions));
+  const out = {
+    nodes: Array.from(r.nodes), nodesPx: Array.from(r.nodesPx), visible: Array.from(r.visible),
+    status: r.status, reason: r.reason ?? null, trackMs: r.track_ms, totalMs: r.total_ms,
+    cloudPoints: r.cloud_points, snapshot: t.snapshot(),
+  };
+  r.free();
+  out.error = m.groundtruth ? Array.from(t.lastError(new Float64Array(m.groundtruth))) : [];
+  return out;
+}
 
 function reply(id, body, transfer = []) {
   postMessage({ id, ok: true, ...body }, transfer);
@@ -28,16 +43,23 @@ async function handle(m) {
     }
     case 'open':
       if (tracker) tracker.free();
+      if (second) second.free();
       tracker = new WasmTracker({ camera: m.camera, params: m.params, hsv: m.hsv });
+      secondAlgorithm = m.compare || null;
+      second = secondAlgorithm
+        ? new WasmTracker({ camera: m.camera, params: { ...m.params, algorithm: secondAlgorithm }, hsv: m.hsv })
+        : null;
       return {};
     case 'params':
       tracker.setParams(m.params);
+      if (second) second.setParams({ ...m.params, algorithm: secondAlgorithm });
       return { params: tracker.params() };
     case 'hsv':
-      tracker.setHsv(new Uint8Array(m.lower), new Uint8Array(m.upper));
+      for (const t of [tracker, second]) if (t) t.setHsv(new Uint8Array(m.lower), new Uint8Array(m.upper));
       return {};
     case 'restore':
-      tracker.restore(m.snapshot ?? null);
+      tracker.restore(m.snapshot ? m.snapshot.main : null);
+      if (second) second.restore(m.snapshot ? m.snapshot.second : null);
       return {};
     case 'frame': {
       let color = m.color, depth = m.depth;
@@ -52,14 +74,14 @@ async function handle(m) {
       const out = { index: m.index, width: f.width, height: f.height, decodeMs, rgba: rgba.buffer };
       const transfer = [rgba.buffer];
       if (m.track) {
-        const r = tracker.trackDecoded(f, m.depthScale, new Int32Array(m.occlusions));
-        Object.assign(out, {
-          nodes: Array.from(r.nodes), nodesPx: Array.from(r.nodesPx), visible: Array.from(r.visible),
-          status: r.status, reason: r.reason ?? null, trackMs: r.track_ms, totalMs: r.total_ms,
-          cloudPoints: r.cloud_points, snapshot: tracker.snapshot(),
-        });
-        r.free();
-        out.error = m.groundtruth ? Array.from(tracker.lastError(new Float64Array(m.groundtruth))) : [];
+        Object.assign(out, track(tracker, f, m));
+        if (second) {
+          out.second = track(second, f, m);
+          out.snapshot = { main: out.snapshot, second: out.second.snapshot };
+          delete out.second.snapshot;
+        } else {
+          out.snapshot = { main: out.snapshot, second: null };
+        }
         if (m.wantMask) {
           const mask = tracker.lastMask();
           out.mask = mask.buffer;

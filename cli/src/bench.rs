@@ -4,12 +4,12 @@
 
 use std::time::Instant;
 
-use upetrack::{Frame, Params, Tracker};
+use upetrack::{Frame, Tracker};
 use upetrack_io::eval::quantile;
 use upetrack_io::run::track_frame;
 use upetrack_synth::{RenderSettings, Scenario, ScenarioKind};
 
-use crate::{open_sequence, Args, CliError};
+use crate::{algorithms, load_params, open_sequence, with_algorithm, Args, CliError};
 
 /// Frames decoded or rendered, then timed.
 struct Prepared {
@@ -20,7 +20,11 @@ struct Prepared {
     frames: Vec<(Vec<u8>, Vec<u16>, Vec<upetrack::Rect>)>,
 }
 
-fn timed(p: &Prepared, params: Params, repeats: usize) -> Result<(Vec<f64>, Vec<f64>), CliError> {
+fn timed(
+    p: &Prepared,
+    params: upetrack::Params,
+    repeats: usize,
+) -> Result<(Vec<f64>, Vec<f64>), CliError> {
     let mut track = Vec::new();
     let mut total = Vec::new();
     for _ in 0..repeats {
@@ -40,9 +44,9 @@ fn timed(p: &Prepared, params: Params, repeats: usize) -> Result<(Vec<f64>, Vec<
     Ok((track, total))
 }
 
-/// `upetrack bench [<sequence>...] [--frames N] [--repeat R]`.
+/// `upetrack bench [<sequence>...] [--frames N] [--repeat R] [--algorithm A,B,..]`.
 pub fn cmd_bench(raw: &[String]) -> Result<(), CliError> {
-    let args = Args::parse(raw, &[], &["frames", "repeat"])?;
+    let args = Args::parse(raw, &[], &["frames", "repeat", "algorithm", "params"])?;
     let frames: usize = args.number("frames", 90)?;
     let repeats: usize = args.number("repeat", 3)?.max(1);
     let mut sets = Vec::new();
@@ -84,23 +88,27 @@ pub fn cmd_bench(raw: &[String]) -> Result<(), CliError> {
             });
         }
     }
-    let params = Params::default();
-    println!("| data | size | frames x runs | median track_ms | p90 track_ms | median total_ms | p90 total_ms |");
-    println!("|---|---|---:|---:|---:|---:|---:|");
+    let params = load_params(args.value("params"))?;
+    let algorithms = algorithms(&args, &params)?;
+    println!("| data | algorithm | size | frames x runs | median track_ms | p90 track_ms | median total_ms | p90 total_ms |");
+    println!("|---|---|---|---:|---:|---:|---:|---:|");
     for p in &sets {
-        let (track, total) = timed(p, params, repeats)?;
-        println!(
-            "| {} | {}x{} | {} x {} | {:.3} | {:.3} | {:.3} | {:.3} |",
-            p.name,
-            p.camera.width,
-            p.camera.height,
-            p.frames.len(),
-            repeats,
-            quantile(&track, 0.5),
-            quantile(&track, 0.9),
-            quantile(&total, 0.5),
-            quantile(&total, 0.9)
-        );
+        for &a in &algorithms {
+            let (track, total) = timed(p, with_algorithm(params, a), repeats)?;
+            println!(
+                "| {} | {} | {}x{} | {} x {} | {:.3} | {:.3} | {:.3} | {:.3} |",
+                p.name,
+                a.name(),
+                p.camera.width,
+                p.camera.height,
+                p.frames.len(),
+                repeats,
+                quantile(&track, 0.5),
+                quantile(&track, 0.9),
+                quantile(&total, 0.5),
+                quantile(&total, 0.9)
+            );
+        }
     }
     Ok(())
 }

@@ -2,6 +2,7 @@
 //! write synthetic scenarios, and benchmark the per-frame cost.
 
 mod bench;
+mod compare;
 mod overlay;
 mod synth;
 
@@ -9,7 +10,7 @@ use std::path::Path;
 use std::process::ExitCode;
 use std::time::Instant;
 
-use upetrack::Params;
+use upetrack::{Algorithm, Params};
 use upetrack_io::eval::{summarise, Summary};
 use upetrack_io::run::track_sequence;
 use upetrack_io::{Sequence, SequenceError};
@@ -18,14 +19,16 @@ const USAGE: &str = "\
 upetrack: track a rope in RGB-D sequences (UPETrack)
 
 USAGE:
-  upetrack track <sequence> --out <result.json> [--params <params.json>]
-  upetrack eval <sequence>... [--params <params.json>] [--json <out.json>] [--markdown <out.md>] [--per-frame <out.csv>]
+  upetrack track <sequence> --out <result.json> [--algorithm A] [--params <params.json>]
+  upetrack eval <sequence>... [--algorithm A,B,..] [--params <params.json>] [--json <out.json>] [--markdown <out.md>] [--per-frame <out.csv>]
+  upetrack compare [--data <dir>] [--frames N] [--json <out.json>] [--markdown <out.md>] [--update <page.md>]
   upetrack synth <scenario> <dir> [--frames N] [--seed S] [--hd]
-  upetrack bench [<sequence>...] [--frames N]
+  upetrack bench [<sequence>...] [--frames N] [--repeat R] [--algorithm A,B,..]
   upetrack overlay <sequence> <result.json> <frame> <out.png> [--depth]
   upetrack scenarios
 
 A sequence is a folder in the layout of docs/sequence-format.md, or a .zip of one.
+Algorithms: upetrack (default), cpd, trackdlo; --algorithm overrides the parameter file's.
 Scenarios: static-s, dynamic-pull, tip-drag, sweep-10..sweep-50, lifted-swing, fast-pull.";
 
 /// A command-line error with its message.
@@ -106,6 +109,30 @@ fn load_params(path: Option<&str>) -> Result<Params, CliError> {
     Ok(params)
 }
 
+/// The algorithms of `--algorithm a,b,..` (the parameter file's when absent).
+fn algorithms(args: &Args, params: &Params) -> Result<Vec<Algorithm>, CliError> {
+    let Some(list) = args.value("algorithm") else {
+        return Ok(vec![params.algorithm]);
+    };
+    list.split(',')
+        .map(|name| {
+            Algorithm::from_name(name.trim()).ok_or_else(|| {
+                CliError(format!(
+                    "--algorithm: unknown algorithm `{name}` (upetrack, cpd or trackdlo)"
+                ))
+            })
+        })
+        .collect()
+}
+
+/// `params` with `algorithm` as the tracking step.
+fn with_algorithm(params: Params, algorithm: Algorithm) -> Params {
+    Params {
+        algorithm,
+        ..params
+    }
+}
+
 /// A sequence from a folder or a .zip.
 pub type AnySequence = Sequence<Box<dyn upetrack_io::Source>>;
 
@@ -120,7 +147,7 @@ fn now_ms_since(start: Instant) -> impl FnMut() -> f64 {
 }
 
 fn cmd_track(raw: &[String]) -> Result<(), CliError> {
-    let args = Args::parse(raw, &[], &["out", "params"])?;
+    let args = Args::parse(raw, &[], &["out", "params", "algorithm"])?;
     let [seq_path] = args.positional.as_slice() else {
         return Err(CliError(format!("track takes one sequence\n\n{USAGE}")));
     };
@@ -128,14 +155,19 @@ fn cmd_track(raw: &[String]) -> Result<(), CliError> {
         .value("out")
         .ok_or_else(|| CliError("track needs --out <result.json>".into()))?;
     let params = load_params(args.value("params"))?;
+    let params = match algorithms(&args, &params)?.as_slice() {
+        [one] => with_algorithm(params, *one),
+        _ => return Err(CliError("track runs one algorithm".into())),
+    };
     let seq = open_sequence(seq_path)?;
     let result = track_sequence(&seq, params, &mut now_ms_since(Instant::now()))?;
     upetrack_io::write::write_json(Path::new(out), &result)?;
     let lost = result.frames.iter().filter(|f| f.lost).count();
     eprintln!(
-        "{}: {} frames tracked ({} lost) -> {}",
+        "{}: {} frames tracked with {} ({} lost) -> {}",
         seq_path,
         result.frames.len(),
+        result.algorithm,
         lost,
         out
     );
@@ -182,39 +214,40 @@ fn markdown_table(rows: &[Summary]) -> String {
 }
 
 fn cmd_eval(raw: &[String]) -> Result<(), CliError> {
-    let args = Args::parse(raw, &[], &["params", "json", "markdown", "per-frame"])?;
+    let args = Args::parse(
+        raw,
+        &[],
+        &["params", "json", "markdown", "per-frame", "algorithm"],
+    )?;
     if args.positional.is_empty() {
         return Err(CliError(format!(
             "eval takes at least one sequence\n\n{USAGE}"
         )));
     }
     let params = load_params(args.value("params"))?;
+    let algorithms = algorithms(&args, &params)?;
+    let several = args.positional.len() > 1 || algorithms.len() > 1;
     let mut rows = Vec::new();
     for path in &args.positional {
         let seq = open_sequence(path)?;
-        let result = track_sequence(&seq, params, &mut now_ms_since(Instant::now()))?;
         let name = Path::new(path)
             .file_name()
             .map_or(path.clone(), |n| n.to_string_lossy().into_owned());
-        let summary = summarise(
-            &name,
-            &result,
-            &seq.groundtruth,
-            &seq.camera,
-            seq.first_occluded_frame(),
-        );
-        if let Some(csv) = args.value("per-frame") {
-            let path = if args.positional.len() > 1 {
-                format!("{csv}.{name}.csv")
-            } else {
-                csv.to_string()
-            };
-            write_per_frame(Path::new(&path), &name, &result, &seq)?;
+        for &algorithm in &algorithms {
+            let (summary, result) = evaluate(&seq, &name, with_algorithm(params, algorithm))?;
+            if let Some(csv) = args.value("per-frame") {
+                let path = if several {
+                    format!("{csv}.{name}.{}.csv", algorithm.name())
+                } else {
+                    csv.to_string()
+                };
+                write_per_frame(Path::new(&path), &name, &result, &seq)?;
+            }
+            if summary.evaluated_frames == 0 {
+                eprintln!("{path}: no ground truth; errors are not available");
+            }
+            rows.push(summary);
         }
-        if summary.evaluated_frames == 0 {
-            eprintln!("{path}: no ground truth; errors are not available");
-        }
-        rows.push(summary);
     }
     let table = markdown_table(&rows);
     println!("{table}");
@@ -225,6 +258,23 @@ fn cmd_eval(raw: &[String]) -> Result<(), CliError> {
         upetrack_io::write::write_file(Path::new(p), table.as_bytes())?;
     }
     Ok(())
+}
+
+/// Tracks `seq` with `params` and summarises the errors against its ground truth.
+fn evaluate(
+    seq: &AnySequence,
+    name: &str,
+    params: Params,
+) -> Result<(Summary, upetrack_io::result::TrackResult), CliError> {
+    let result = track_sequence(seq, params, &mut now_ms_since(Instant::now()))?;
+    let summary = summarise(
+        name,
+        &result,
+        &seq.groundtruth,
+        &seq.camera,
+        seq.first_occluded_frame(),
+    );
+    Ok((summary, result))
 }
 
 /// Writes one CSV row per frame: error, timings, visible nodes, lost.
@@ -262,6 +312,7 @@ fn run(raw: &[String]) -> Result<(), CliError> {
     match cmd.as_str() {
         "track" => cmd_track(rest),
         "eval" => cmd_eval(rest),
+        "compare" => compare::cmd_compare(rest),
         "synth" => synth::cmd_synth(rest),
         "bench" => bench::cmd_bench(rest),
         "overlay" => overlay::cmd_overlay(rest),

@@ -15,6 +15,10 @@
 //! 8. [`resampling`]: uniform arc-length resampling (Eq. 12-15).
 //! 9. [`metrics`]: the frame error (Eq. 16-18) in metres and pixels.
 //!
+//! Steps 5-8 are UPETrack's per-frame [`step`]; the baselines replace them
+//! with [`cpd`] (deformable coherent point drift) or [`trackdlo`]
+//! (TrackDLO, reimplemented), sharing everything else.
+//!
 //! [`tracker::Tracker`] holds the state between frames and runs the stages.
 //! [`params::Params`] gathers every tunable number with the paper's defaults.
 //!
@@ -29,6 +33,7 @@ extern crate alloc;
 extern crate std;
 
 pub mod camera;
+pub mod cpd;
 pub mod frame;
 pub mod initialisation;
 pub mod math;
@@ -40,6 +45,8 @@ pub mod registration;
 pub mod resampling;
 pub mod rng;
 pub mod segmentation;
+pub mod step;
+pub mod trackdlo;
 pub mod tracker;
 pub mod visibility;
 
@@ -48,4 +55,5 @@ pub use frame::Frame;
 pub use math::Vec3;
 pub use params::Params;
 pub use segmentation::{HsvRange, Rect};
+pub use step::Algorithm;
 pub use tracker::{FrameOutput, FrameStatus, Tracker};

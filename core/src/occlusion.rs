@@ -22,6 +22,10 @@ pub struct UpeCoefficients {
     pub bending_resistance: f64,
     /// Weight of the displacement estimate against the geometric one (`alpha`).
     pub displacement_weight: f64,
+    /// `alpha` for a hidden run that includes an end of the rope, where
+    /// nothing on the far side anchors the geometric term (this project's
+    /// decision; `displacement_weight` gives the paper's rule).
+    pub end_displacement_weight: f64,
 }
 
 /// How the hidden nodes of one frame were placed.
@@ -70,8 +74,28 @@ pub fn estimate_node(
     y_disp * c.displacement_weight + y_geom * (1.0 - c.displacement_weight)
 }
 
+/// `true` for each hidden node whose run of hidden nodes reaches an end of the rope.
+pub fn hidden_end_runs(known: &[bool]) -> Vec<bool> {
+    let n = known.len();
+    let mut out = alloc::vec![false; n];
+    for i in 0..n {
+        if known[i] {
+            break;
+        }
+        out[i] = true;
+    }
+    for i in (0..n).rev() {
+        if known[i] {
+            break;
+        }
+        out[i] = true;
+    }
+    out
+}
+
 /// One sweep in the direction `forward` (increasing index) or backward.
-/// Returns the estimate for each node it could place.
+/// Returns the estimate for each node it could place; nodes of a hidden
+/// end run use `end_displacement_weight` as `alpha`.
 fn sweep(
     nodes: &[Vec3],
     known: &[bool],
@@ -79,6 +103,11 @@ fn sweep(
     c: &UpeCoefficients,
     forward: bool,
 ) -> Vec<Option<Vec3>> {
+    let at_end = hidden_end_runs(known);
+    let end_c = UpeCoefficients {
+        displacement_weight: c.end_displacement_weight,
+        ..*c
+    };
     let n = nodes.len();
     let mut now = nodes.to_vec();
     let mut known_now = known.to_vec();
@@ -99,7 +128,8 @@ fn sweep(
             continue;
         };
         if known_now[n1] && known_now[n2] && known_now[n3] {
-            let y = estimate_node(m, [n1, n2, n3], &now, prev, c);
+            let coefficients = if at_end[m] { &end_c } else { c };
+            let y = estimate_node(m, [n1, n2, n3], &now, prev, coefficients);
             if math::is_finite(&y) {
                 now[m] = y;
                 known_now[m] = true;
@@ -178,6 +208,7 @@ mod tests {
         curvature_retention: 0.6,
         bending_resistance: 0.8,
         displacement_weight: 0.75,
+        end_displacement_weight: 0.75,
     };
 
     #[test]
@@ -221,6 +252,7 @@ mod tests {
         // so y = (1, 1): the bend is kept. The printed sign gives (3, -1).
         let c = UpeCoefficients {
             displacement_weight: 0.0,
+            end_displacement_weight: 0.0,
             curvature_retention: 1.0,
             bending_resistance: 1.0,
             displacement_decay: 0.8,
@@ -351,6 +383,58 @@ mod tests {
         assert_eq!(nodes, prev);
     }
 
+    #[test]
+    fn end_runs_are_told_from_middle_runs() {
+        let known = [false, false, true, true, false, true, false];
+        assert_eq!(
+            hidden_end_runs(&known),
+            [true, true, false, false, false, false, true]
+        );
+        assert_eq!(hidden_end_runs(&[false; 3]), [true; 3]);
+        assert_eq!(hidden_end_runs(&[]), [false; 0]);
+    }
+
+    /// Regression for "a hidden tip straightens": with the displacement term
+    /// alone at the ends, a hidden curved tip whose visible neighbours all
+    /// move by one vector moves by that vector and keeps its curve; with the
+    /// paper's `alpha` it is pulled towards the straight line.
+    #[test]
+    fn a_hidden_curved_tip_moves_with_its_neighbours_and_keeps_its_shape() {
+        // A quarter circle of 8 nodes, the first 3 hidden, the rope shifted.
+        let prev: Vec<Vec3> = (0..8)
+            .map(|i| {
+                let t = i as f64 * 0.2;
+                Vec3::new(libm::cos(t), libm::sin(t), 0.0)
+            })
+            .collect();
+        let shift = Vec3::new(0.05, -0.02, 0.01);
+        let known: Vec<bool> = (0..8).map(|i| i >= 3).collect();
+        let c = UpeCoefficients {
+            end_displacement_weight: 1.0,
+            ..PAPER
+        };
+        let mut nodes: Vec<Vec3> = prev.iter().map(|p| p + shift).collect();
+        nodes[..3].copy_from_slice(&prev[..3]);
+        estimate_hidden(&mut nodes, &known, &prev, &c);
+        for m in 0..3 {
+            assert!((nodes[m] - (prev[m] + shift)).norm() < 1e-12, "node {m}");
+        }
+        let mut paper = prev.clone();
+        for m in 3..8 {
+            paper[m] = prev[m] + shift;
+        }
+        estimate_hidden(&mut paper, &known, &prev, &PAPER);
+        assert!((paper[0] - (prev[0] + shift)).norm() > 1e-3);
+        // A middle run is not an end run: the paper's alpha applies there.
+        let mut known_mid = vec![true; 8];
+        known_mid[4] = false;
+        let mut a = prev.clone();
+        let mut b = prev.clone();
+        estimate_hidden(&mut a, &known_mid, &prev, &c);
+        estimate_hidden(&mut b, &known_mid, &prev, &PAPER);
+        assert_eq!(a, b);
+    }
+
     /// Property: finite inputs give finite outputs, whatever the pattern.
     #[test]
     fn random_finite_inputs_give_finite_outputs() {
@@ -371,6 +455,7 @@ mod tests {
                 curvature_retention: rng.uniform(),
                 bending_resistance: rng.uniform(),
                 displacement_weight: rng.uniform(),
+                end_displacement_weight: rng.uniform(),
             };
             estimate_hidden(&mut nodes, &known, &prev, &c);
             assert!(nodes.iter().all(math::is_finite), "case {case}");

@@ -1,9 +1,12 @@
 //! Every tunable number of the tracker in one plain struct, with the paper's
 //! defaults. Invalid values are rejected with [`ParamsError`], never clamped.
 
+use crate::cpd::CpdSettings;
 use crate::occlusion::UpeCoefficients;
 use crate::point_cloud::{CloudSettings, SURFACE_TO_AXIS_RATIO};
 use crate::registration::EmSettings;
+use crate::step::Algorithm;
+use crate::trackdlo::TrackDloParams;
 
 /// Fewest nodes accepted: UPE needs three known nodes and one to estimate.
 pub const MIN_NODES: usize = 4;
@@ -42,6 +45,11 @@ pub struct Params {
     pub bending_resistance: f64,
     /// Weight of the displacement estimate (`alpha`, Eq. 11). Paper: 0.75.
     pub displacement_weight: f64,
+    /// `alpha` for a hidden run that includes an end of the rope. Default 1
+    /// (the displacement term alone: a hidden tip moves with its visible
+    /// neighbours and keeps its shape); `displacement_weight` gives the
+    /// paper's rule. See `docs/algorithm-notes.md`.
+    pub end_displacement_weight: f64,
     /// Visibility radius (`r_vis`), metres. Paper: 20 mm.
     pub visibility_radius: f64,
     /// Points needed within `r_vis` for a node to be visible (`V_lim`). Paper: 3.
@@ -78,6 +86,13 @@ pub struct Params {
     /// re-initialise (accepted under `reinit_length_fraction`): the rope may
     /// have jumped. 0 turns it off. Default 0.5.
     pub reinit_visible_fraction: f64,
+    /// The per-frame tracking step. Default UPETrack; CPD and TrackDLO are
+    /// the baselines, sharing everything else.
+    pub algorithm: Algorithm,
+    /// CPD's settings (used when `algorithm` is CPD).
+    pub cpd: CpdSettings,
+    /// TrackDLO's parameters (used when `algorithm` is TrackDLO).
+    pub trackdlo: TrackDloParams,
 }
 
 impl Default for Params {
@@ -91,6 +106,7 @@ impl Default for Params {
             curvature_retention: 0.6,
             bending_resistance: 0.8,
             displacement_weight: 0.75,
+            end_displacement_weight: 1.0,
             visibility_radius: 0.020,
             visibility_min_points: 3,
             visibility_min_fraction: 0.5,
@@ -105,11 +121,15 @@ impl Default for Params {
             min_blob_pixels: 150,
             reinit_length_fraction: 0.8,
             reinit_visible_fraction: 0.5,
+            algorithm: Algorithm::Upetrack,
+            cpd: CpdSettings::default(),
+            trackdlo: TrackDloParams::default(),
         }
     }
 }
 
-fn check(
+/// `Ok` when `ok` holds and `value` is finite, else the error naming `name`.
+pub(crate) fn check(
     name: &'static str,
     value: f64,
     ok: bool,
@@ -140,6 +160,7 @@ impl Params {
         unit("displacement_decay", self.displacement_decay)?;
         unit("curvature_retention", self.curvature_retention)?;
         unit("displacement_weight", self.displacement_weight)?;
+        unit("end_displacement_weight", self.end_displacement_weight)?;
         let b = self.bending_resistance;
         check(
             "bending_resistance",
@@ -220,7 +241,8 @@ impl Params {
             (0.0..=1.0).contains(&f),
             "in [0, 1]",
         )?;
-        Ok(())
+        self.cpd.validate()?;
+        self.trackdlo.validate()
     }
 
     /// The UPE coefficients.
@@ -230,6 +252,7 @@ impl Params {
             curvature_retention: self.curvature_retention,
             bending_resistance: self.bending_resistance,
             displacement_weight: self.displacement_weight,
+            end_displacement_weight: self.end_displacement_weight,
         }
     }
 
@@ -278,7 +301,10 @@ mod tests {
     #[test]
     fn invalid_values_are_rejected_by_name() {
         type Case = (&'static str, fn(&mut Params));
-        let cases: [Case; 9] = [
+        let cases: [Case; 12] = [
+            ("cpd.beta", |p| p.cpd.beta = 0.0),
+            ("trackdlo.mu", |p| p.trackdlo.mu = 1.0),
+            ("trackdlo.max_iterations", |p| p.trackdlo.max_iterations = 0),
             ("visibility_min_fraction", |p| {
                 p.visibility_min_fraction = 1.5
             }),

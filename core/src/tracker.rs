@@ -8,13 +8,15 @@ use alloc::vec::Vec;
 use crate::camera::{CameraError, CameraIntrinsics};
 use crate::frame::{Frame, FrameError};
 use crate::initialisation::{initialise, InitError};
-use crate::math::{self, Vec3};
-use crate::occlusion::{estimate_hidden, UpeReport};
+use crate::math::Vec3;
+use crate::occlusion::UpeReport;
 use crate::params::{Params, ParamsError};
 use crate::point_cloud::build_cloud;
-use crate::registration::{register, EmReport};
+use crate::registration::EmReport;
 use crate::resampling::{polyline_length, resample_uniform};
 use crate::segmentation::{segment, HsvRange, Mask, Rect, SegmentationError};
+use crate::step::{StepInput, Stepper, TrackingStep};
+use crate::trackdlo::TrackDloReport;
 use crate::visibility::visible_nodes_relative;
 
 /// Errors building or reconfiguring a tracker.
@@ -80,6 +82,8 @@ pub struct FrameOutput {
     pub em: Option<EmReport>,
     /// How hidden nodes were placed (tracked frames only).
     pub upe: Option<UpeReport>,
+    /// What TrackDLO did (TrackDLO's tracked frames only).
+    pub trackdlo: Option<TrackDloReport>,
 }
 
 impl FrameOutput {
@@ -113,6 +117,7 @@ struct TrackState {
 pub struct TrackerSnapshot {
     state: Option<TrackState>,
     known_length: Option<f64>,
+    stepper: Stepper,
 }
 
 /// Tracks one rope across the frames of one camera.
@@ -124,6 +129,8 @@ pub struct Tracker {
     state: Option<TrackState>,
     /// Length at the first initialisation, metres.
     known_length: Option<f64>,
+    /// The per-frame step of `params.algorithm`.
+    stepper: Stepper,
 }
 
 impl Tracker {
@@ -142,6 +149,7 @@ impl Tracker {
             hsv,
             state: None,
             known_length: None,
+            stepper: Stepper::new(params.algorithm),
         })
     }
 
@@ -166,15 +174,23 @@ impl Tracker {
     }
 
     /// Replaces the parameters; takes effect at the next frame. A new node
-    /// count resamples the current nodes along the same curve.
+    /// count resamples the current nodes along the same curve; a new node
+    /// count or algorithm starts the step afresh from the current nodes.
     pub fn set_params(&mut self, params: Params) -> Result<(), TrackerError> {
         params.validate()?;
+        let mut restart = params.algorithm != self.params.algorithm;
         if let Some(state) = self.state.as_mut() {
             if state.nodes.len() != params.node_count {
                 state.nodes = resample_uniform(&state.nodes, params.node_count);
+                restart = true;
             }
         }
         self.params = params;
+        if restart {
+            self.stepper = Stepper::new(params.algorithm);
+            let nodes = self.nodes().to_vec();
+            self.stepper.start(&nodes);
+        }
         Ok(())
     }
 
@@ -190,25 +206,36 @@ impl Tracker {
         TrackerSnapshot {
             state: self.state.clone(),
             known_length: self.known_length,
+            stepper: self.stepper.clone(),
         }
     }
 
     /// Goes back to a state taken by [`Tracker::snapshot`]. A snapshot with
-    /// another node count is resampled to the current one.
+    /// another node count is resampled to the current one; one taken with
+    /// another node count or algorithm starts the step afresh.
     pub fn restore(&mut self, snapshot: TrackerSnapshot) {
+        let mut restart = snapshot.stepper.algorithm() != self.params.algorithm;
         self.state = snapshot.state.map(|mut s| {
             if s.nodes.len() != self.params.node_count && !s.nodes.is_empty() {
                 s.nodes = resample_uniform(&s.nodes, self.params.node_count);
+                restart = true;
             }
             s
         });
         self.known_length = snapshot.known_length;
+        self.stepper = snapshot.stepper;
+        if restart {
+            self.stepper = Stepper::new(self.params.algorithm);
+            let nodes = self.nodes().to_vec();
+            self.stepper.start(&nodes);
+        }
     }
 
     /// Forgets the state: the next frame initialises again.
     pub fn reset(&mut self) {
         self.state = None;
         self.known_length = None;
+        self.stepper = Stepper::new(self.params.algorithm);
     }
 
     /// Segmentation and point cloud of `frame`, with `occlusions` blacked out.
@@ -253,25 +280,24 @@ impl Tracker {
                 return out;
             }
         }
-        let p = &self.params;
-        let mut nodes = prev.clone();
-        let em = register(&obs.cloud, &mut nodes, &visible, &p.em());
-        let upe = estimate_hidden(&mut nodes, &visible, &prev, &p.upe());
-        let mut nodes = resample_uniform(&nodes, p.node_count);
-        if nodes.len() != p.node_count || !nodes.iter().all(math::is_finite) {
-            // Cannot happen with finite inputs; keep the last good state if it does.
-            nodes = prev;
-        }
+        let out = self.stepper.step(&StepInput {
+            previous: &prev,
+            cloud: &obs.cloud,
+            visible: &visible,
+            camera: &self.camera,
+            params: &self.params,
+        });
         self.state = Some(TrackState {
-            nodes: nodes.clone(),
+            nodes: out.nodes.clone(),
             lost: false,
         });
         FrameOutput {
-            nodes,
-            visible,
+            nodes: out.nodes,
+            visible: out.visible,
             status: FrameStatus::Tracked,
-            em: Some(em),
-            upe: Some(upe),
+            em: out.em,
+            upe: out.upe,
+            trackdlo: out.trackdlo,
         }
     }
 
@@ -314,12 +340,14 @@ impl Tracker {
             nodes: init.nodes.clone(),
             lost: false,
         });
+        self.stepper.start(&init.nodes);
         Ok(FrameOutput {
             nodes: init.nodes,
             visible,
             status: FrameStatus::Initialised,
             em: None,
             upe: None,
+            trackdlo: None,
         })
     }
 
@@ -350,6 +378,7 @@ impl Tracker {
             status: FrameStatus::Lost(reason),
             em: None,
             upe: None,
+            trackdlo: None,
         }
     }
 

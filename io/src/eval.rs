@@ -119,6 +119,8 @@ pub struct Summary {
     pub occluded_mean_px: f64,
     /// Largest frame error, mm.
     pub max_mm: f64,
+    /// Error of the last frame with ground truth, mm (TrackDLO's protocol).
+    pub final_mm: f64,
     /// Frames above [`FAILURE_THRESHOLD_MM`].
     pub frames_above_20mm: usize,
     /// Median tracking step time, ms.
@@ -155,6 +157,7 @@ pub fn summarise(
         occluded_mean_mm: mean(&occ.iter().map(|e| e.mm).collect::<Vec<_>>()),
         occluded_mean_px: mean(&occ.iter().map(|e| e.px).collect::<Vec<_>>()),
         max_mm: mm.iter().copied().fold(f64::NAN, f64::max),
+        final_mm: mm.last().copied().unwrap_or(f64::NAN),
         frames_above_20mm: mm.iter().filter(|&&e| e > FAILURE_THRESHOLD_MM).count(),
         median_track_ms: quantile(&track, 0.5),
         median_total_ms: quantile(&total, 0.5),

@@ -9,9 +9,6 @@ use crate::result::{FrameRecord, TrackResult};
 use crate::sequence::Sequence;
 use crate::source::Source;
 
-/// Algorithm name written in results.
-pub const ALGORITHM: &str = "upetrack";
-
 /// Tracks one decoded frame and returns its record. `now_ms` is read around
 /// the stages to fill `track_ms` and `total_ms`.
 pub fn track_frame(
@@ -61,7 +58,7 @@ pub fn track_sequence<S: Source>(
         frames.push(record);
     }
     Ok(TrackResult {
-        algorithm: ALGORITHM.to_string(),
+        algorithm: params.algorithm.name().to_string(),
         params,
         frames,
     })

@@ -233,6 +233,50 @@ await test('a drawn occlusion hides nodes, which are still estimated near the tr
   await page.close();
 });
 
+await test('two algorithms on one sequence: each matches its native run, both drawn and plotted', async () => {
+  const seq = path.join(root, 'samples/dynamic-pull');
+  const refs = {};
+  for (const a of ['upetrack', 'trackdlo']) {
+    const out = path.join(tmp, `${a}.json`);
+    execFileSync(native, ['track', seq, '--algorithm', a, '--out', out]);
+    refs[a] = JSON.parse(fs.readFileSync(out, 'utf8'));
+  }
+  const page = await newPage('?sample=dynamic-pull&autoplay=0&compare=trackdlo');
+  const got = await page.evaluate(async () => {
+    const u = window.upetrack;
+    const main = await u.trackAll();
+    const second = u.state.results.map((r) => {
+      const n = [];
+      for (let j = 0; j < r.second.nodes.length; j += 3) n.push([r.second.nodes[j], r.second.nodes[j + 1], r.second.nodes[j + 2]]);
+      return n;
+    });
+    await u.goTo(20);
+    return { main: main.frames.map((f) => f.nodes), second, label: document.getElementById('plot-label').textContent,
+      errors: u.state.results.map((r) => [r.error[0], r.second.error[0]]) };
+  });
+  const worst = (a, b) => Math.max(...a.flatMap((f, k) => f.flatMap((p, j) => p.map((c, d) => Math.abs(c - b[k][j][d])))));
+  const dMain = worst(refs.upetrack.frames.map((f) => f.nodes), got.main);
+  const dSecond = worst(refs.trackdlo.frames.map((f) => f.nodes), got.second);
+  console.log(`     differences from native: UPETrack ${dMain.toExponential(2)} m, TrackDLO ${dSecond.toExponential(2)} m`);
+  assert(got.main.length === refs.upetrack.frames.length && dMain < 1e-6, `UPETrack differs by ${dMain}`);
+  assert(got.second.length === refs.trackdlo.frames.length && dSecond < 1e-6, `TrackDLO differs by ${dSecond}`);
+  assert(/UPETrack mean/.test(got.label) && /TrackDLO mean/.test(got.label), `plot label: ${got.label}`);
+  assert(got.errors.every(([a, b]) => Number.isFinite(a) && Number.isFinite(b)), 'both errors on every frame');
+  await page.screenshot({ path: path.join(artifacts, 'compare.png') });
+  // Another compared algorithm re-tracks the sequence with it.
+  const switched = await page.evaluate(async () => {
+    const u = window.upetrack;
+    document.getElementById('compare').value = 'cpd';
+    document.getElementById('algorithms').dispatchEvent(new Event('change'));
+    await new Promise((r) => setTimeout(r, 200));
+    await u.state.busy;
+    await u.trackAll();
+    return { tracked: u.state.tracked, label: document.getElementById('plot-label').textContent };
+  });
+  assert(switched.tracked === refs.upetrack.frames.length - 1 && /CPD mean/.test(switched.label), `after switching: ${JSON.stringify(switched)}`);
+  await page.close();
+});
+
 await test('no console errors and no request leaves the origin', async () => {
   const outside = requests.filter((u) => !u.startsWith(origin) && !u.startsWith('blob:') && !u.startsWith('data:'));
   assert(outside.length === 0, `requests outside the origin: ${outside.slice(0, 5)}`);
