@@ -22,8 +22,9 @@ pub struct UpeCoefficients {
     pub bending_resistance: f64,
     /// Weight of the displacement estimate against the geometric one (`alpha`).
     pub displacement_weight: f64,
-    /// `alpha` for a hidden run that includes an end of the rope, where
-    /// nothing on the far side anchors the geometric term (this project's
+    /// `alpha` for a hidden run of at least [`MIN_END_RUN`] nodes that
+    /// includes an end of the rope, where nothing on the far side anchors
+    /// the geometric term (this project's
     /// decision; `displacement_weight` gives the paper's rule).
     pub end_displacement_weight: f64,
 }
@@ -74,21 +75,24 @@ pub fn estimate_node(
     y_disp * c.displacement_weight + y_geom * (1.0 - c.displacement_weight)
 }
 
-/// `true` for each hidden node whose run of hidden nodes reaches an end of the rope.
+/// A hidden run at an end of the rope uses `end_displacement_weight` only
+/// from this many nodes on. A lone hidden end node (one that moved too fast
+/// for the visibility test, say) is one spacing from two known nodes, where
+/// Eq. 8-10 follow a turning end better than a translation does.
+pub const MIN_END_RUN: usize = 2;
+
+/// `true` for each hidden node whose run of hidden nodes reaches an end of
+/// the rope and has at least [`MIN_END_RUN`] nodes.
 pub fn hidden_end_runs(known: &[bool]) -> Vec<bool> {
     let n = known.len();
     let mut out = alloc::vec![false; n];
-    for i in 0..n {
-        if known[i] {
-            break;
-        }
-        out[i] = true;
+    let head = known.iter().take_while(|&&k| !k).count();
+    let tail = known.iter().rev().take_while(|&&k| !k).count();
+    if head >= MIN_END_RUN {
+        out[..head].iter_mut().for_each(|v| *v = true);
     }
-    for i in (0..n).rev() {
-        if known[i] {
-            break;
-        }
-        out[i] = true;
+    if tail >= MIN_END_RUN {
+        out[n - tail..].iter_mut().for_each(|v| *v = true);
     }
     out
 }
@@ -385,11 +389,14 @@ mod tests {
 
     #[test]
     fn end_runs_are_told_from_middle_runs() {
-        let known = [false, false, true, true, false, true, false];
+        let known = [false, false, true, true, false, true, false, false];
         assert_eq!(
             hidden_end_runs(&known),
-            [true, true, false, false, false, false, true]
+            [true, true, false, false, false, false, true, true]
         );
+        // A lone hidden end node is not an end run.
+        let known = [false, true, true, true, false, true, true, false];
+        assert_eq!(hidden_end_runs(&known), [false; 8]);
         assert_eq!(hidden_end_runs(&[false; 3]), [true; 3]);
         assert_eq!(hidden_end_runs(&[]), [false; 0]);
     }

@@ -45,7 +45,8 @@ pub struct Params {
     pub bending_resistance: f64,
     /// Weight of the displacement estimate (`alpha`, Eq. 11). Paper: 0.75.
     pub displacement_weight: f64,
-    /// `alpha` for a hidden run that includes an end of the rope. Default 1
+    /// `alpha` for a hidden run of two or more nodes that includes an end of
+    /// the rope (`occlusion::MIN_END_RUN`). Default 1
     /// (the displacement term alone: a hidden tip moves with its visible
     /// neighbours and keeps its shape); `displacement_weight` gives the
     /// paper's rule. See `docs/algorithm-notes.md`.
