@@ -600,7 +600,7 @@ $('embed-snippet').textContent =
 
 async function start() {
   const { params } = await call({ type: 'defaults' });
-  for (const [k, v] of query) if (k.startsWith('p.') && k.slice(2) in params) params[k.slice(2)] = Number(v);
+  for (const [k, v] of query) if (k.startsWith('p.') && typeof params[k.slice(2)] === 'number') params[k.slice(2)] = Number(v);
   if (query.get('algorithm') in ALGORITHM_NAMES) params.algorithm = query.get('algorithm');
   if (query.get('compare') in ALGORITHM_NAMES) state.compare = query.get('compare');
   $('algorithm').value = params.algorithm;
