@@ -14,7 +14,7 @@ function track(t, f, m) {
   const out = {
     nodes: Array.from(r.nodes), nodesPx: Array.from(r.nodesPx), visible: Array.from(r.visible),
     status: r.status, reason: r.reason ?? null, trackMs: r.track_ms, totalMs: r.total_ms,
-    cloudPoints: r.cloud_points, snapshot: t.snapshot(),
+    cloudPoints: r.cloud_points,
   };
   r.free();
   out.error = m.groundtruth ? Array.from(t.lastError(new Float64Array(m.groundtruth))) : [];
@@ -75,13 +75,8 @@ async function handle(m) {
       const transfer = [rgba.buffer];
       if (m.track) {
         Object.assign(out, track(tracker, f, m));
-        if (second) {
-          out.second = track(second, f, m);
-          out.snapshot = { main: out.snapshot, second: out.second.snapshot };
-          delete out.second.snapshot;
-        } else {
-          out.snapshot = { main: out.snapshot, second: null };
-        }
+        if (second) out.second = track(second, f, m);
+        out.snapshot = { main: tracker.snapshot(), second: second ? second.snapshot() : null };
         if (m.wantMask) {
           const mask = tracker.lastMask();
           out.mask = mask.buffer;

@@ -11,7 +11,7 @@
 
 use nalgebra::DMatrix;
 
-use crate::math;
+use crate::math::{self, Vec3};
 use crate::params::{check, ParamsError};
 
 /// Most `M x N` point pairs one registration accepts (the responsibility
@@ -156,6 +156,18 @@ pub struct CpdOutcome {
     pub converged: bool,
 }
 
+/// 3D points as the rows of an `N x 3` matrix.
+pub fn points_to_matrix(points: &[Vec3]) -> DMatrix<f64> {
+    DMatrix::from_fn(points.len(), 3, |i, c| points[i][c])
+}
+
+/// The rows of an `N x 3` matrix as 3D points.
+pub fn matrix_to_points(rows: &DMatrix<f64>) -> alloc::vec::Vec<Vec3> {
+    (0..rows.nrows())
+        .map(|i| Vec3::new(rows[(i, 0)], rows[(i, 1)], rows[(i, 2)]))
+        .collect()
+}
+
 /// The Gaussian kernel `G_ij = exp(-|y_i - y_j|^2 / (2 beta^2))` on the rows of `points`.
 pub fn gaussian_kernel(points: &DMatrix<f64>, beta: f64) -> DMatrix<f64> {
     let m = points.nrows();
@@ -256,8 +268,9 @@ impl Responsibilities {
     }
 }
 
-/// Solves `A W = B` (the coherent M-step), `None` when `A` is singular.
-pub fn solve_m_step(a: DMatrix<f64>, b: &DMatrix<f64>) -> Option<DMatrix<f64>> {
+/// Solves `A W = B` by LU (the coherent M-step, and TrackDLO's LLE
+/// weights), `None` when `A` is singular or the solution is not finite.
+pub fn solve_linear(a: DMatrix<f64>, b: &DMatrix<f64>) -> Option<DMatrix<f64>> {
     let w = a.lu().solve(b)?;
     w.iter().all(|v| v.is_finite()).then_some(w)
 }
@@ -327,7 +340,7 @@ pub fn register_deformable(
         let r = Responsibilities::of(&p, target);
         let a = r.scale_rows(&g) + DMatrix::identity(m, m) * (settings.lambda * variance);
         let b = &r.px - r.scale_rows(source);
-        let Some(w) = solve_m_step(a, &b) else {
+        let Some(w) = solve_linear(a, &b) else {
             return Ok(CpdOutcome {
                 points: moved,
                 variance,

@@ -6,10 +6,9 @@
 //! coherent point drift from the previous nodes) or TrackDLO.
 
 use alloc::vec::Vec;
-use nalgebra::DMatrix;
 
 use crate::camera::CameraIntrinsics;
-use crate::cpd::{register_deformable, thin_to_pair_cap};
+use crate::cpd::{matrix_to_points, points_to_matrix, register_deformable, thin_to_pair_cap};
 use crate::math::{self, Vec3};
 use crate::occlusion::{estimate_hidden, UpeReport};
 use crate::params::Params;
@@ -82,6 +81,19 @@ pub struct StepOutput {
     pub trackdlo: Option<TrackDloReport>,
 }
 
+impl StepOutput {
+    /// New nodes and visibility, with no algorithm-specific report.
+    pub fn nodes(nodes: Vec<Vec3>, visible: Vec<bool>) -> Self {
+        Self {
+            nodes,
+            visible,
+            em: None,
+            upe: None,
+            trackdlo: None,
+        }
+    }
+}
+
 /// One algorithm's per-frame step and its state between frames.
 pub trait TrackingStep {
     /// Which algorithm this is.
@@ -110,11 +122,12 @@ impl TrackingStep for UpeTrackStep {
         let em = register(input.cloud, &mut nodes, input.visible, &p.em());
         let upe = estimate_hidden(&mut nodes, input.visible, input.previous, &p.upe());
         StepOutput {
-            nodes: resample_uniform(&nodes, p.node_count),
-            visible: input.visible.to_vec(),
             em: Some(em),
             upe: Some(upe),
-            trackdlo: None,
+            ..StepOutput::nodes(
+                resample_uniform(&nodes, p.node_count),
+                input.visible.to_vec(),
+            )
         }
     }
 }
@@ -132,23 +145,14 @@ impl TrackingStep for CpdStep {
     fn start(&mut self, _nodes: &[Vec3]) {}
 
     fn step(&mut self, input: &StepInput<'_>) -> StepOutput {
-        let to_matrix = |pts: &[Vec3]| DMatrix::from_fn(pts.len(), 3, |i, c| pts[i][c]);
-        let y = to_matrix(input.previous);
-        let x = to_matrix(&thin_to_pair_cap(input.cloud, input.previous.len()));
+        let y = points_to_matrix(input.previous);
+        let x = points_to_matrix(&thin_to_pair_cap(input.cloud, input.previous.len()));
         // An empty cloud leaves the nodes where they were.
         let nodes = match register_deformable(&x, &y, None, &input.params.cpd) {
-            Ok(out) => (0..out.points.nrows())
-                .map(|i| Vec3::new(out.points[(i, 0)], out.points[(i, 1)], out.points[(i, 2)]))
-                .collect(),
+            Ok(out) => matrix_to_points(&out.points),
             Err(_) => input.previous.to_vec(),
         };
-        StepOutput {
-            nodes,
-            visible: input.visible.to_vec(),
-            em: None,
-            upe: None,
-            trackdlo: None,
-        }
+        StepOutput::nodes(nodes, input.visible.to_vec())
     }
 }
 
@@ -180,11 +184,8 @@ impl TrackingStep for TrackDloStep {
             &input.params.trackdlo,
         );
         StepOutput {
-            nodes,
-            visible,
-            em: None,
-            upe: None,
             trackdlo: Some(report),
+            ..StepOutput::nodes(nodes, visible)
         }
     }
 }

@@ -14,7 +14,8 @@ use nalgebra::DMatrix;
 
 use crate::camera::CameraIntrinsics;
 use crate::cpd::{
-    normalise_columns, outlier_constant, solve_m_step, thin_to_pair_cap, Responsibilities,
+    matrix_to_points, normalise_columns, outlier_constant, pairwise_variance, points_to_matrix,
+    solve_linear, thin_to_pair_cap, Responsibilities,
 };
 use crate::math::{self, Vec2, Vec3};
 use crate::params::{check, ParamsError};
@@ -179,7 +180,7 @@ pub fn lle_weights(nodes: &[Vec3]) -> DMatrix<f64> {
             gram[(a, a)] += reg;
         }
         let ones = DMatrix::from_element(k, 1, 1.0);
-        let w = solve_m_step(gram, &ones).unwrap_or_else(|| ones.clone());
+        let w = solve_linear(gram, &ones).unwrap_or_else(|| ones.clone());
         let total = w.sum();
         if !(total.abs() > f64::EPSILON) {
             continue;
@@ -488,19 +489,22 @@ pub struct CpdLleReport {
     pub converged: bool,
 }
 
-fn to_matrix(points: &[Vec3]) -> DMatrix<f64> {
-    DMatrix::from_fn(points.len(), 3, |i, c| points[i][c])
+/// Squared Euclidean distances from every node (row) to every point (column).
+fn squared_distances(nodes: &DMatrix<f64>, x: &DMatrix<f64>) -> DMatrix<f64> {
+    DMatrix::from_fn(nodes.nrows(), x.nrows(), |i, j| {
+        (nodes.row(i) - x.row(j)).norm_squared()
+    })
 }
 
-/// Squared distances along the rope from each point to every node: exact to
-/// the point's nearest node and its nearer neighbour, then along the rope
-/// from whichever of the two is on the node's side (the source's geodesic
-/// responsibilities).
-fn geodesic_sq_distances(nodes: &DMatrix<f64>, x: &DMatrix<f64>, s: &[f64]) -> DMatrix<f64> {
-    let (m, n) = (nodes.nrows(), x.nrows());
+/// Squared distances along the rope from each point to every node, from the
+/// squared Euclidean ones `sq`: exact to the point's nearest node and its
+/// nearer neighbour, then along the rope from whichever of the two is on the
+/// node's side (the source's geodesic responsibilities).
+fn geodesic_sq_distances(sq: &DMatrix<f64>, s: &[f64]) -> DMatrix<f64> {
+    let (m, n) = sq.shape();
     let mut out = DMatrix::zeros(m, n);
     for j in 0..n {
-        let dist = |i: usize| (nodes.row(i) - x.row(j)).norm();
+        let dist = |i: usize| math::sqrt(sq[(i, j)]);
         let nearest = (0..m)
             .min_by(|&a, &b| dist(a).total_cmp(&dist(b)))
             .unwrap_or(0);
@@ -573,9 +577,9 @@ pub fn cpd_lle(
     if m == 0 || near.is_empty() {
         return report;
     }
-    let x = to_matrix(&near);
+    let x = points_to_matrix(&near);
     let n = near.len();
-    let y0 = to_matrix(nodes);
+    let y0 = points_to_matrix(nodes);
     let s = arc_coordinates(nodes);
     let g = rope_kernel(&s, settings.beta);
     let h = if settings.lle_weight > 0.0 {
@@ -596,27 +600,20 @@ pub fn cpd_lle(
     let weigh_visibility = settings.k_vis != 0.0
         && visible.is_some_and(|v| v.len() == m && v.iter().any(|&b| b) && !v.iter().all(|&b| b));
     if !(*variance > 0.0) || !variance.is_finite() {
-        let mut sum = 0.0;
-        for i in 0..m {
-            for k in 0..n {
-                sum += (y0.row(i) - x.row(k)).norm_squared();
-            }
-        }
-        *variance = (sum / (3 * m * n) as f64).max(MIN_VARIANCE);
+        *variance = pairwise_variance(&x, &y0).max(MIN_VARIANCE);
     }
     let mut y = y0.clone();
     let t2 = settings.visibility_threshold * settings.visibility_threshold;
     for it in 0..settings.max_iterations {
-        let mut p = geodesic_sq_distances(&y, &x, &s);
+        let sq = squared_distances(&y, &x);
+        let mut p = geodesic_sq_distances(&sq, &s);
         let scale = 0.5 / *variance;
         p.iter_mut().for_each(|d| *d = math::exp(-*d * scale));
         let mut c = outlier_constant(*variance, 3, settings.mu, m, n);
         if weigh_visibility {
             let weights: Vec<f64> = (0..m)
                 .map(|i| {
-                    let d2 = (0..n)
-                        .map(|k| (y.row(i) - x.row(k)).norm_squared())
-                        .fold(f64::INFINITY, f64::min);
+                    let d2 = sq.row(i).iter().copied().fold(f64::INFINITY, f64::min);
                     let d = if d2 <= t2 { 0.0 } else { math::sqrt(d2) };
                     math::exp(-settings.k_vis * d)
                 })
@@ -643,7 +640,7 @@ pub fn cpd_lle(
             a += &j * &g * settings.alpha;
             b += (&y_prior - &y0) * settings.alpha;
         }
-        let Some(w) = solve_m_step(a, &b) else {
+        let Some(w) = solve_linear(a, &b) else {
             break;
         };
         let t = &y0 + &g * w;
@@ -661,8 +658,7 @@ pub fn cpd_lle(
             break;
         }
     }
-    for (i, node) in nodes.iter_mut().enumerate() {
-        let p = Vec3::new(y[(i, 0)], y[(i, 1)], y[(i, 2)]);
+    for (node, p) in nodes.iter_mut().zip(matrix_to_points(&y)) {
         if math::is_finite(&p) {
             *node = p;
         }
