@@ -12,6 +12,11 @@ done
 
 echo "== cargo fmt --check"
 cargo fmt --all -- --check
+echo "== no module cycles (scripts/module_cycles.py; the fixture must fail)"
+python3 scripts/module_cycles.py
+if python3 scripts/module_cycles.py tests/data/module-cycle >/dev/null; then
+  echo "module_cycles.py missed the fixture's cycle"; exit 1
+fi
 echo "== clippy -D warnings"
 cargo clippy --workspace --all-targets -- -D warnings
 echo "== rustdoc -D warnings"

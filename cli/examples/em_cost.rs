@@ -21,8 +21,13 @@ fn main() {
     let mut iterations = 0;
     for _ in 0..20 {
         let mut nodes = prev.clone();
-        iterations +=
-            upetrack::registration::register(&obs.cloud, &mut nodes, &vis, &params.em()).iterations;
+        iterations += upetrack::upe::registration::register(
+            &obs.cloud,
+            &mut nodes,
+            &vis,
+            &params.upetrack.em(),
+        )
+        .iterations;
     }
     println!(
         "{} points, {} iterations per call",

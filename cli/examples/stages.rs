@@ -3,8 +3,8 @@
 
 use std::time::Instant;
 
-use upetrack::point_cloud::{build_cloud, deproject_mask, voxel_downsample};
-use upetrack::segmentation::segment;
+use upetrack::perception::point_cloud::{build_cloud, deproject_mask, voxel_downsample};
+use upetrack::perception::segmentation::segment;
 use upetrack::{Frame, Params, Tracker};
 use upetrack_synth::{RenderSettings, Scenario, ScenarioKind};
 

@@ -137,7 +137,7 @@ fn with_algorithm(params: Params, algorithm: Algorithm) -> Params {
 pub type AnySequence = Sequence<Box<dyn upetrack_io::Source>>;
 
 fn open_sequence(path: &str) -> Result<AnySequence, CliError> {
-    Ok(Sequence::open(upetrack_io::source::open_path(Path::new(
+    Ok(Sequence::open(upetrack_io::open::open_path(Path::new(
         path,
     ))?)?)
 }

@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 
 use upetrack::math::Vec3;
-use upetrack::segmentation::segment;
+use upetrack::perception::segmentation::segment;
 use upetrack::{Algorithm, Frame, Params, Tracker};
 use upetrack_io::eval::{frame_errors, summarise};
 use upetrack_io::run::track_sequence;
@@ -62,7 +62,7 @@ fn written_sequence_loads_and_matches_its_ground_truth() {
         let mask = segment(&frame, &seq.hsv, &[]);
         let gt = seq.groundtruth[i].as_ref().expect("ground truth");
         // The rope's length is kept by the simulation within 2 %.
-        let len = upetrack::resampling::polyline_length(gt);
+        let len = upetrack::upe::resampling::polyline_length(gt);
         assert!((len - 0.8).abs() < 0.016, "rope length {len}");
         let mut on_rope = 0;
         let mut depth_err = Vec::new();
@@ -459,10 +459,8 @@ fn compare_writes_both_tables_into_a_page_between_its_markers() {
 fn a_hidden_tip_moves_with_the_pulled_rope_instead_of_straightening() {
     let kind = ScenarioKind::OcclusionSweep { percent: 30 };
     let ours = mean(&track_scenario(kind, 60, Params::default()).1);
-    let paper = Params {
-        end_displacement_weight: Params::default().displacement_weight,
-        ..Params::default()
-    };
+    let mut paper = Params::default();
+    paper.upetrack.end_displacement_weight = paper.upetrack.displacement_weight;
     let papers = mean(&track_scenario(kind, 60, paper).1);
     eprintln!("sweep-30: occluded mean {ours:.2} mm (ends: displacement alone), {papers:.2} mm (paper's alpha)");
     assert!(ours < 10.0, "occluded mean {ours:.2} mm");

@@ -3,24 +3,36 @@
 //!
 //! The modules follow the pipeline of one frame, in order:
 //!
-//! 1. [`camera`] and [`frame`]: intrinsics, deprojection, the input images.
-//! 2. [`segmentation`]: HSV thresholds (OpenCV convention) after the
-//!    occlusion rectangles are blacked out.
-//! 3. [`point_cloud`]: masked pixels with valid depth, voxel-grid downsampling.
-//! 4. [`initialisation`]: the rope's ordered centre line from a mask, M nodes
-//!    placed evenly along it.
-//! 5. [`visibility`]: which nodes still have points within `r_vis`.
-//! 6. [`registration`]: GMM-EM of the visible nodes (Eq. 1-5).
-//! 7. [`occlusion`]: Unidirectional Position Estimation of hidden nodes (Eq. 6-11).
-//! 8. [`resampling`]: uniform arc-length resampling (Eq. 12-15).
-//! 9. [`metrics`]: the frame error (Eq. 16-18) in metres and pixels.
+//! 1. [`perception`], the stages every algorithm shares: [`perception::camera`]
+//!    and [`perception::frame`] (intrinsics, the input images),
+//!    [`perception::segmentation`] (HSV thresholds after the occlusion
+//!    rectangles), [`perception::point_cloud`] (deprojection, voxel grid,
+//!    pushed to the rope's axis) and [`perception::initialisation`] (the
+//!    ordered centre line and `M` nodes when there is no state).
+//! 2. [`upe`], UPETrack's own step: [`upe::visibility`] (`q >= V_lim`
+//!    within `r_vis`), [`upe::registration`] (GMM-EM of the visible nodes,
+//!    Eq. 1-5), [`upe::occlusion`] (Unidirectional Position Estimation of
+//!    the hidden nodes, Eq. 6-11) and [`upe::resampling`] (Eq. 12-15).
+//! 3. [`baselines`], the other tracking steps on the same pipeline:
+//!    [`baselines::cpd`] and [`baselines::trackdlo`].
+//! 4. [`metrics`]: the frame error (Eq. 16-18) in metres and pixels.
 //!
-//! Steps 5-8 are UPETrack's per-frame [`step`]; the baselines replace them
-//! with [`cpd`] (deformable coherent point drift) or [`trackdlo`]
-//! (TrackDLO, reimplemented), sharing everything else.
+//! At the top: [`tracker::Tracker`] holds the state between frames and runs
+//! the stages; [`step`] is the interface every algorithm implements;
+//! [`params::Params`] composes the shared settings with each algorithm's
+//! own; [`validation`] is the one error type of a rejected parameter.
 //!
-//! [`tracker::Tracker`] holds the state between frames and runs the stages.
-//! [`params::Params`] gathers every tunable number with the paper's defaults.
+//! **Where a new tracking algorithm goes, and what it implements.** A new
+//! algorithm is a folder (or a file) under `baselines/`, beside CPD and
+//! TrackDLO. It implements [`step::TrackingStep`]: `start` (forget per-track
+//! state when the nodes are (re)initialised) and `step` (the previous nodes
+//! and this frame's cloud in, new nodes and their visibility out), with its
+//! own `Settings` struct (a `Default` with its published values and a
+//! `validate` using [`validation::check`]) and `Report`. It never imports
+//! [`params`] or [`tracker`]: to use it, add a variant to [`step::Algorithm`],
+//! a settings field to [`params::Params`], and a variant to
+//! [`tracker::Stepper`], which hands the step its settings. Segmentation,
+//! the point cloud, initialisation and loss handling come for free.
 //!
 //! The crate is `no_std` with `alloc`; `std` is a default feature. It has no
 //! clock and no hidden randomness, and all transcendental functions go
@@ -32,28 +44,21 @@ extern crate alloc;
 #[cfg(feature = "std")]
 extern crate std;
 
-pub mod camera;
-pub mod cpd;
-pub mod frame;
-pub mod initialisation;
+pub mod baselines;
 pub mod math;
 pub mod metrics;
-pub mod occlusion;
 pub mod params;
-pub mod point_cloud;
-pub mod registration;
-pub mod resampling;
+pub mod perception;
 pub mod rng;
-pub mod segmentation;
 pub mod step;
-pub mod trackdlo;
 pub mod tracker;
-pub mod visibility;
+pub mod upe;
+pub mod validation;
 
-pub use camera::CameraIntrinsics;
-pub use frame::Frame;
 pub use math::Vec3;
 pub use params::Params;
-pub use segmentation::{HsvRange, Rect};
+pub use perception::camera::CameraIntrinsics;
+pub use perception::frame::Frame;
+pub use perception::segmentation::{HsvRange, Rect};
 pub use step::Algorithm;
 pub use tracker::{FrameOutput, FrameStatus, Tracker};

@@ -6,8 +6,8 @@ use alloc::vec::Vec;
 
 use nalgebra::SVector;
 
-use crate::camera::CameraIntrinsics;
 use crate::math::{self, Vec2, Vec3};
+use crate::perception::camera::CameraIntrinsics;
 
 /// Distance from `p` to the polyline through `curve` (Eq. 16). A one-point
 /// curve is that point; an empty curve gives `None`.

@@ -1,34 +1,26 @@
-//! Every tunable number of the tracker in one plain struct, with the paper's
-//! defaults. Invalid values are rejected with [`ParamsError`], never clamped.
+//! Every tunable number of the tracker in one plain struct that composes
+//! the shared pipeline's settings with each algorithm's own
+//! ([`UpeTrackParams`], [`CpdSettings`], [`TrackDloParams`]). Invalid values
+//! are rejected with [`ParamsError`], never clamped.
+//!
+//! In a parameter file UPETrack's fields sit at the top level beside the
+//! shared ones (the file format predates the split), the baselines' under
+//! `"cpd"` and `"trackdlo"`.
 
-use crate::cpd::CpdSettings;
-use crate::occlusion::UpeCoefficients;
-use crate::point_cloud::{CloudSettings, SURFACE_TO_AXIS_RATIO};
-use crate::registration::EmSettings;
+use crate::baselines::cpd::CpdSettings;
+use crate::baselines::trackdlo::TrackDloParams;
+use crate::perception::initialisation::InitSettings;
+use crate::perception::point_cloud::{CloudSettings, SURFACE_TO_AXIS_RATIO};
 use crate::step::Algorithm;
-use crate::trackdlo::TrackDloParams;
+pub use crate::upe::registration::MAX_EM_ITERATIONS;
+use crate::upe::UpeTrackParams;
+use crate::validation::check;
+pub use crate::validation::ParamsError;
 
 /// Fewest nodes accepted: UPE needs three known nodes and one to estimate.
 pub const MIN_NODES: usize = 4;
 /// Most nodes accepted; every per-frame cost grows with it.
 pub const MAX_NODES: usize = 1000;
-/// Most EM iterations accepted per frame.
-pub const MAX_EM_ITERATIONS: u32 = 1000;
-
-/// A rejected parameter.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum ParamsError {
-    /// A parameter is outside its documented range (or not finite).
-    #[error("parameter `{name}` = {value} is invalid: it must be {expected}")]
-    OutOfRange {
-        /// Field name.
-        name: &'static str,
-        /// The rejected value.
-        value: f64,
-        /// The accepted range, in words.
-        expected: &'static str,
-    },
-}
 
 /// The tracker's parameters. Lengths are in metres.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -37,20 +29,6 @@ pub enum ParamsError {
 pub struct Params {
     /// Number of nodes along the rope (`M`). Paper: 24.
     pub node_count: usize,
-    /// Distance attenuation factor of the local displacement term (`gamma`, Eq. 6). Paper: 0.8.
-    pub displacement_decay: f64,
-    /// Historical curvature retention (`a`, Eq. 10). Paper: 0.6.
-    pub curvature_retention: f64,
-    /// Bending resistance of the proximal linear constraint (`b`, Eq. 8). Paper: 0.8.
-    pub bending_resistance: f64,
-    /// Weight of the displacement estimate (`alpha`, Eq. 11). Paper: 0.75.
-    pub displacement_weight: f64,
-    /// `alpha` for a hidden run of two or more nodes that includes an end of
-    /// the rope (`occlusion::MIN_END_RUN`). Default 1
-    /// (the displacement term alone: a hidden tip moves with its visible
-    /// neighbours and keeps its shape); `displacement_weight` gives the
-    /// paper's rule. See `docs/algorithm-notes.md`.
-    pub end_displacement_weight: f64,
     /// Visibility radius (`r_vis`), metres. Paper: 20 mm.
     pub visibility_radius: f64,
     /// Points needed within `r_vis` for a node to be visible (`V_lim`). Paper: 3.
@@ -60,14 +38,6 @@ pub struct Params {
     /// edge of an occlusion counts as hidden (0: the paper's rule alone).
     /// Default 0.5; see `docs/algorithm-notes.md`.
     pub visibility_min_fraction: f64,
-    /// Weight of the uniform outlier component (`w`, Eq. 3). Default 0.1.
-    pub outlier_weight: f64,
-    /// EM stops when no node moves more than this in an iteration, metres. Default 0.1 mm.
-    pub em_tolerance: f64,
-    /// Most EM iterations per frame. Default 10 (30 costs three times as much and was no more accurate on the synthetic scenarios).
-    pub em_max_iterations: u32,
-    /// Floor of the GMM variance (`sigma^2`), square metres. Default (1 mm)^2.
-    pub min_variance: f64,
     /// Voxel-grid leaf size for downsampling the cloud, metres (0 keeps all points). Default 8 mm.
     pub voxel_size: f64,
     /// Radius of the rope, metres: the cloud (its visible surface) is moved
@@ -87,6 +57,10 @@ pub struct Params {
     /// re-initialise (accepted under `reinit_length_fraction`): the rope may
     /// have jumped. 0 turns it off. Default 0.5.
     pub reinit_visible_fraction: f64,
+    /// UPETrack's registration and occlusion-estimate parameters (in a
+    /// file: at the top level).
+    #[cfg_attr(feature = "serde", serde(flatten))]
+    pub upetrack: UpeTrackParams,
     /// The per-frame tracking step. Default UPETrack; CPD and TrackDLO are
     /// the baselines, sharing everything else.
     pub algorithm: Algorithm,
@@ -103,18 +77,9 @@ impl Default for Params {
     fn default() -> Self {
         Self {
             node_count: 24,
-            displacement_decay: 0.8,
-            curvature_retention: 0.6,
-            bending_resistance: 0.8,
-            displacement_weight: 0.75,
-            end_displacement_weight: 1.0,
             visibility_radius: 0.020,
             visibility_min_points: 3,
             visibility_min_fraction: 0.5,
-            outlier_weight: 0.1,
-            em_tolerance: 1e-4,
-            em_max_iterations: 10,
-            min_variance: 1e-6,
             voxel_size: 0.008,
             dlo_radius: 0.0075,
             min_depth: 0.1,
@@ -122,28 +87,11 @@ impl Default for Params {
             min_blob_pixels: 150,
             reinit_length_fraction: 0.8,
             reinit_visible_fraction: 0.5,
+            upetrack: UpeTrackParams::default(),
             algorithm: Algorithm::Upetrack,
             cpd: CpdSettings::default(),
             trackdlo: TrackDloParams::default(),
         }
-    }
-}
-
-/// `Ok` when `ok` holds and `value` is finite, else the error naming `name`.
-pub(crate) fn check(
-    name: &'static str,
-    value: f64,
-    ok: bool,
-    expected: &'static str,
-) -> Result<(), ParamsError> {
-    if ok && value.is_finite() {
-        Ok(())
-    } else {
-        Err(ParamsError::OutOfRange {
-            name,
-            value,
-            expected,
-        })
     }
 }
 
@@ -156,18 +104,6 @@ impl Params {
             m as f64,
             (MIN_NODES..=MAX_NODES).contains(&m),
             "an integer in 4..=1000",
-        )?;
-        let unit = |name, v: f64| check(name, v, (0.0..=1.0).contains(&v), "in [0, 1]");
-        unit("displacement_decay", self.displacement_decay)?;
-        unit("curvature_retention", self.curvature_retention)?;
-        unit("displacement_weight", self.displacement_weight)?;
-        unit("end_displacement_weight", self.end_displacement_weight)?;
-        let b = self.bending_resistance;
-        check(
-            "bending_resistance",
-            b,
-            (0.0..=2.0).contains(&b),
-            "in [0, 2]",
         )?;
         let r = self.visibility_radius;
         check(
@@ -189,24 +125,6 @@ impl Params {
             vf,
             (0.0..=1.0).contains(&vf),
             "in [0, 1]",
-        )?;
-        let w = self.outlier_weight;
-        check("outlier_weight", w, (0.0..1.0).contains(&w), "in [0, 1)")?;
-        let t = self.em_tolerance;
-        check("em_tolerance", t, t > 0.0 && t <= 1.0, "in (0, 1] metres")?;
-        let it = self.em_max_iterations;
-        check(
-            "em_max_iterations",
-            it as f64,
-            (1..=MAX_EM_ITERATIONS).contains(&it),
-            "an integer in 1..=1000",
-        )?;
-        let s = self.min_variance;
-        check(
-            "min_variance",
-            s,
-            s > 0.0 && s <= 1.0,
-            "in (0, 1] square metres",
         )?;
         let vx = self.voxel_size;
         check(
@@ -242,29 +160,9 @@ impl Params {
             (0.0..=1.0).contains(&f),
             "in [0, 1]",
         )?;
+        self.upetrack.validate()?;
         self.cpd.validate()?;
         self.trackdlo.validate()
-    }
-
-    /// The UPE coefficients.
-    pub fn upe(&self) -> UpeCoefficients {
-        UpeCoefficients {
-            displacement_decay: self.displacement_decay,
-            curvature_retention: self.curvature_retention,
-            bending_resistance: self.bending_resistance,
-            displacement_weight: self.displacement_weight,
-            end_displacement_weight: self.end_displacement_weight,
-        }
-    }
-
-    /// The EM settings.
-    pub fn em(&self) -> EmSettings {
-        EmSettings {
-            outlier_weight: self.outlier_weight,
-            tolerance: self.em_tolerance,
-            max_iterations: self.em_max_iterations,
-            min_variance: self.min_variance,
-        }
     }
 
     /// The point cloud settings.
@@ -274,6 +172,15 @@ impl Params {
             max_depth: self.max_depth,
             voxel_size: self.voxel_size,
             axis_offset: self.dlo_radius * SURFACE_TO_AXIS_RATIO,
+        }
+    }
+
+    /// The initialisation settings.
+    pub fn init(&self) -> InitSettings {
+        InitSettings {
+            node_count: self.node_count,
+            min_blob_pixels: self.min_blob_pixels,
+            cloud: self.cloud(),
         }
     }
 }
@@ -288,10 +195,10 @@ mod tests {
         assert_eq!(p.node_count, 24);
         assert_eq!(
             (
-                p.displacement_decay,
-                p.curvature_retention,
-                p.bending_resistance,
-                p.displacement_weight
+                p.upetrack.displacement_decay,
+                p.upetrack.curvature_retention,
+                p.upetrack.bending_resistance,
+                p.upetrack.displacement_weight
             ),
             (0.8, 0.6, 0.8, 0.75)
         );
@@ -311,10 +218,14 @@ mod tests {
             }),
             ("node_count", |p| p.node_count = 3),
             ("node_count", |p| p.node_count = 5_000_000),
-            ("displacement_decay", |p| p.displacement_decay = f64::NAN),
-            ("bending_resistance", |p| p.bending_resistance = -0.1),
+            ("displacement_decay", |p| {
+                p.upetrack.displacement_decay = f64::NAN
+            }),
+            ("bending_resistance", |p| {
+                p.upetrack.bending_resistance = -0.1
+            }),
             ("visibility_radius", |p| p.visibility_radius = f64::INFINITY),
-            ("outlier_weight", |p| p.outlier_weight = 1.0),
+            ("outlier_weight", |p| p.upetrack.outlier_weight = 1.0),
             ("visibility_min_points", |p| p.visibility_min_points = 0),
             ("max_depth", |p| p.max_depth = f64::NAN),
         ];

@@ -13,7 +13,7 @@
 
 use nalgebra::DMatrix;
 use serde_json::Value;
-use upetrack::cpd::{register_deformable, CpdSettings};
+use upetrack::baselines::cpd::{register_deformable, CpdSettings};
 
 fn matrix(v: &Value) -> DMatrix<f64> {
     let rows: Vec<Vec<f64>> = v

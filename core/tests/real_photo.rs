@@ -2,9 +2,9 @@
 //! `rope.png`): the mask covers the rope and nothing else, and the ordered
 //! centre line runs from one cyan cap to the other.
 
-use upetrack::initialisation::{find_centre_line, largest_blob};
 use upetrack::math::Vec2;
-use upetrack::segmentation::segment;
+use upetrack::perception::initialisation::{find_centre_line, largest_blob};
+use upetrack::perception::segmentation::segment;
 use upetrack::{Frame, HsvRange};
 
 fn load_rope() -> (u32, u32, Vec<u8>) {

@@ -4,7 +4,8 @@
 
 use libfuzzer_sys::fuzz_target;
 use upetrack::math::Vec3;
-use upetrack::step::{Algorithm, StepInput, Stepper, TrackingStep};
+use upetrack::step::{Algorithm, StepInput};
+use upetrack::tracker::Stepper;
 use upetrack::{CameraIntrinsics, Params};
 
 fuzz_target!(|data: &[u8]| {
@@ -31,13 +32,15 @@ fuzz_target!(|data: &[u8]| {
     let visible = vec![true; m];
     let mut stepper = Stepper::new(algorithm);
     stepper.start(prev);
-    let out = stepper.step(&StepInput {
-        previous: prev,
-        cloud,
-        visible: &visible,
-        camera: &camera,
-        params: &params,
-    });
+    let out = stepper.step(
+        &StepInput {
+            previous: prev,
+            cloud,
+            visible: &visible,
+            camera: &camera,
+        },
+        &params,
+    );
     assert_eq!(out.nodes.len(), m);
     assert!(out.nodes.iter().all(|q| q.iter().all(|c| c.is_finite())));
 });

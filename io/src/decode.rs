@@ -1,7 +1,7 @@
 //! Image decoding with maintained pure-Rust decoders (`png`, `zune-jpeg`).
 //! Sizes are checked from the header before the pixel buffer is allocated.
 
-use upetrack::camera::MAX_IMAGE_SIDE;
+use upetrack::perception::camera::MAX_IMAGE_SIDE;
 
 use crate::error::SequenceError;
 

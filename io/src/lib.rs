@@ -7,6 +7,7 @@ pub mod archive;
 pub mod decode;
 pub mod error;
 pub mod eval;
+pub mod open;
 pub mod result;
 pub mod run;
 pub mod sequence;

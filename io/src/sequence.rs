@@ -140,7 +140,10 @@ pub struct DecodedFrame {
 
 impl DecodedFrame {
     /// The core's borrowed view.
-    pub fn frame(&self, depth_scale: f64) -> Result<Frame<'_>, upetrack::frame::FrameError> {
+    pub fn frame(
+        &self,
+        depth_scale: f64,
+    ) -> Result<Frame<'_>, upetrack::perception::frame::FrameError> {
         Frame::new(
             self.width,
             self.height,

@@ -6,8 +6,8 @@ use alloc::string::String;
 use alloc::vec::Vec;
 
 use upetrack::math::Vec3;
+use upetrack::perception::segmentation::rgb_to_hsv;
 use upetrack::rng::SplitMix64;
-use upetrack::segmentation::rgb_to_hsv;
 use upetrack::{CameraIntrinsics, HsvRange, Rect};
 
 use crate::render::{render, world_to_camera, OccluderBox, RenderSettings};

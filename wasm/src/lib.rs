@@ -39,10 +39,18 @@ struct TrackerOptions {
     hsv: Option<HsvRange>,
 }
 
+/// A value as plain JS objects (maps too: `Params` flattens UPETrack's
+/// fields into the top level, which serde writes as a map).
+fn to_js<T: serde::Serialize>(value: &T) -> Result<JsValue, JsError> {
+    value
+        .serialize(&serde_wasm_bindgen::Serializer::new().serialize_maps_as_objects(true))
+        .map_err(js_err)
+}
+
 /// The default parameters as a plain object (documented in `core/src/params.rs`).
 #[wasm_bindgen(js_name = defaultParams)]
 pub fn default_params() -> Result<JsValue, JsError> {
-    serde_wasm_bindgen::to_value(&Params::default()).map_err(js_err)
+    to_js(&Params::default())
 }
 
 /// The tracker of one sequence.
@@ -126,7 +134,7 @@ impl WasmTracker {
 
     /// The parameters in force.
     pub fn params(&self) -> Result<JsValue, JsError> {
-        serde_wasm_bindgen::to_value(self.tracker.params()).map_err(js_err)
+        to_js(self.tracker.params())
     }
 
     /// Replaces the HSV range (`[h, s, v]` lower and upper, OpenCV convention).
@@ -143,7 +151,7 @@ impl WasmTracker {
 
     /// The state after the last frame, to return to it with `restore`.
     pub fn snapshot(&self) -> Result<JsValue, JsError> {
-        serde_wasm_bindgen::to_value(&self.tracker.snapshot()).map_err(js_err)
+        to_js(&self.tracker.snapshot())
     }
 
     /// Goes back to a state from `snapshot` (`null`: the initial state).

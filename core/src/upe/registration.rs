@@ -6,7 +6,11 @@
 use alloc::vec;
 use alloc::vec::Vec;
 
+use super::resampling::polyline_length;
 use crate::math::{self, Vec3};
+
+/// Most EM iterations accepted per frame.
+pub const MAX_EM_ITERATIONS: u32 = 1000;
 
 /// Dimension of the points (`D` in the paper).
 const DIM: f64 = 3.0;
@@ -71,7 +75,7 @@ pub fn initial_variance(cloud: &[Vec3], nodes: &[Vec3], active: &[bool], min_var
         }
     }
     let cap = if nodes.len() > 1 {
-        let spacing = crate::resampling::polyline_length(nodes) / (nodes.len() - 1) as f64;
+        let spacing = polyline_length(nodes) / (nodes.len() - 1) as f64;
         (spacing * spacing).max(min_variance)
     } else {
         f64::INFINITY

@@ -1,7 +1,7 @@
 //! One RGB-D frame as the tracker sees it: an 8-bit RGB image and a 16-bit
 //! depth image aligned to it, borrowed from the caller.
 
-use crate::camera::{CameraIntrinsics, MAX_IMAGE_SIDE};
+use super::camera::{CameraIntrinsics, MAX_IMAGE_SIDE};
 
 /// Errors in the images of one frame.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -12,7 +12,8 @@
 use nalgebra::DMatrix;
 
 use crate::math::{self, Vec3};
-use crate::params::{check, ParamsError};
+use crate::step::{Algorithm, StepInput, StepOutput, TrackingStep};
+use crate::validation::{check, ParamsError};
 
 /// Most `M x N` point pairs one registration accepts (the responsibility
 /// matrix has that many entries, 8 bytes each: 32 MB).
@@ -364,6 +365,35 @@ pub fn register_deformable(
         iterations,
         converged: change <= settings.tolerance,
     })
+}
+
+/// The CPD baseline's step: plain deformable CPD from the previous nodes,
+/// `sigma^2` started from the data each frame; no occlusion handling beyond
+/// its coherence.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct CpdStep;
+
+impl TrackingStep for CpdStep {
+    type Settings = CpdSettings;
+    type Report = ();
+    const ALGORITHM: Algorithm = Algorithm::Cpd;
+
+    fn start(&mut self, _nodes: &[Vec3]) {}
+
+    fn step(&mut self, input: &StepInput<'_>, settings: &CpdSettings) -> StepOutput<()> {
+        let y = points_to_matrix(input.previous);
+        let x = points_to_matrix(&thin_to_pair_cap(input.cloud, input.previous.len()));
+        // An empty cloud leaves the nodes where they were.
+        let nodes = match register_deformable(&x, &y, None, settings) {
+            Ok(out) => matrix_to_points(&out.points),
+            Err(_) => input.previous.to_vec(),
+        };
+        StepOutput {
+            nodes,
+            visible: input.visible.to_vec(),
+            report: (),
+        }
+    }
 }
 
 #[cfg(test)]

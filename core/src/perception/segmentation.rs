@@ -5,7 +5,7 @@
 use alloc::vec;
 use alloc::vec::Vec;
 
-use crate::frame::Frame;
+use super::frame::Frame;
 
 /// Largest hue value in OpenCV's 8-bit convention.
 pub const HUE_MAX: u8 = 179;

@@ -7,13 +7,12 @@ use alloc::collections::VecDeque;
 use alloc::vec;
 use alloc::vec::Vec;
 
-use crate::camera::CameraIntrinsics;
-use crate::frame::Frame;
+use super::camera::CameraIntrinsics;
+use super::frame::Frame;
+use super::point_cloud::{depth_at, push_along_rays, CloudSettings};
+use super::segmentation::Mask;
 use crate::math::{Vec2, Vec3};
-use crate::params::Params;
-use crate::point_cloud::{depth_at, push_along_rays, CloudSettings};
-use crate::resampling::{polyline_length, resample_uniform};
-use crate::segmentation::Mask;
+use crate::upe::resampling::{polyline_length, resample_uniform};
 
 /// Fewest pixels on a centre line worth initialising from.
 pub const MIN_CENTRE_LINE_PIXELS: usize = 8;
@@ -367,21 +366,32 @@ pub struct Initialisation {
     pub length: f64,
 }
 
+/// What initialisation needs from the parameters.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InitSettings {
+    /// Nodes to place (`M`).
+    pub node_count: usize,
+    /// Smallest blob of mask pixels taken as the rope.
+    pub min_blob_pixels: u32,
+    /// Depth range and the surface-to-axis push of the 3D lift.
+    pub cloud: CloudSettings,
+}
+
 /// The whole stage: centre line, 3D lift, even placement of `M` nodes.
 pub fn initialise(
     frame: &Frame<'_>,
     mask: &Mask,
     camera: &CameraIntrinsics,
-    params: &Params,
+    settings: &InitSettings,
 ) -> Result<Initialisation, InitError> {
-    let path = find_centre_line(mask, params.min_blob_pixels)?;
-    let line = lift_to_3d(&path, frame, mask, camera, &params.cloud())?;
+    let path = find_centre_line(mask, settings.min_blob_pixels)?;
+    let line = lift_to_3d(&path, frame, mask, camera, &settings.cloud)?;
     let length = polyline_length(&line);
     if !(length > 0.0) || !length.is_finite() {
         return Err(InitError::TooShort { pixels: path.len() });
     }
     Ok(Initialisation {
-        nodes: resample_uniform(&line, params.node_count),
+        nodes: resample_uniform(&line, settings.node_count),
         length,
     })
 }

@@ -4,10 +4,10 @@
 use alloc::vec;
 use alloc::vec::Vec;
 
-use crate::camera::CameraIntrinsics;
-use crate::frame::Frame;
+use super::camera::CameraIntrinsics;
+use super::frame::Frame;
+use super::segmentation::Mask;
 use crate::math::{self, Vec3};
-use crate::segmentation::Mask;
 
 /// Most points handed to registration. Larger clouds are thinned by a fixed
 /// stride so that one frame's cost stays bounded whatever the input.

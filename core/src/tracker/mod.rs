@@ -5,19 +5,22 @@
 use alloc::vec;
 use alloc::vec::Vec;
 
-use crate::camera::{CameraError, CameraIntrinsics};
-use crate::frame::{Frame, FrameError};
-use crate::initialisation::{initialise, InitError};
+use crate::baselines::trackdlo::TrackDloReport;
 use crate::math::Vec3;
-use crate::occlusion::UpeReport;
 use crate::params::{Params, ParamsError};
-use crate::point_cloud::build_cloud;
-use crate::registration::EmReport;
-use crate::resampling::{polyline_length, resample_uniform};
-use crate::segmentation::{segment, HsvRange, Mask, Rect, SegmentationError};
-use crate::step::{StepInput, Stepper, TrackingStep};
-use crate::trackdlo::TrackDloReport;
-use crate::visibility::visible_nodes_relative;
+use crate::perception::camera::{CameraError, CameraIntrinsics};
+use crate::perception::frame::{Frame, FrameError};
+use crate::perception::initialisation::{initialise, InitError};
+use crate::perception::point_cloud::build_cloud;
+use crate::perception::segmentation::{segment, HsvRange, Mask, Rect, SegmentationError};
+use crate::step::StepInput;
+use crate::upe::occlusion::UpeReport;
+use crate::upe::registration::EmReport;
+use crate::upe::resampling::{polyline_length, resample_uniform};
+use crate::upe::visibility::visible_nodes_relative;
+
+mod stepper;
+pub use stepper::{StepReports, Stepper};
 
 /// Errors building or reconfiguring a tracker.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -280,13 +283,15 @@ impl Tracker {
                 return out;
             }
         }
-        let out = self.stepper.step(&StepInput {
-            previous: &prev,
-            cloud: &obs.cloud,
-            visible: &visible,
-            camera: &self.camera,
-            params: &self.params,
-        });
+        let out = self.stepper.step(
+            &StepInput {
+                previous: &prev,
+                cloud: &obs.cloud,
+                visible: &visible,
+                camera: &self.camera,
+            },
+            &self.params,
+        );
         self.state = Some(TrackState {
             nodes: out.nodes.clone(),
             lost: false,
@@ -295,9 +300,9 @@ impl Tracker {
             nodes: out.nodes,
             visible: out.visible,
             status: FrameStatus::Tracked,
-            em: out.em,
-            upe: out.upe,
-            trackdlo: out.trackdlo,
+            em: out.report.em,
+            upe: out.report.upe,
+            trackdlo: out.report.trackdlo,
         }
     }
 
@@ -316,7 +321,7 @@ impl Tracker {
         frame: &Frame<'_>,
         obs: &Observation,
     ) -> Result<FrameOutput, ReinitFailure> {
-        let init = initialise(frame, &obs.mask, &self.camera, &self.params)
+        let init = initialise(frame, &obs.mask, &self.camera, &self.params.init())
             .map_err(ReinitFailure::Init)?;
         if let Some(known) = self.known_length {
             if init.length < self.params.reinit_length_fraction * known {

@@ -1,0 +1,12 @@
+//! The shared stages of one frame, the same for every tracking algorithm:
+//! [`camera`] and [`frame`] (intrinsics, deprojection, the input images),
+//! [`segmentation`] (HSV thresholds after the occlusion rectangles),
+//! [`point_cloud`] (masked pixels with depth, voxel grid, pushed to the
+//! rope's axis) and [`initialisation`] (the ordered centre line and `M`
+//! nodes when there is no state).
+
+pub mod camera;
+pub mod frame;
+pub mod initialisation;
+pub mod point_cloud;
+pub mod segmentation;

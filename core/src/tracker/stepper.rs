@@ -1,0 +1,105 @@
+//! The step of the algorithm in force, dispatched without boxing so that the
+//! tracker stays `Clone` and its snapshots serialisable. Adding an algorithm
+//! adds one variant here.
+
+use crate::baselines::cpd::CpdStep;
+use crate::baselines::trackdlo::{TrackDloReport, TrackDloStep};
+use crate::math::{self, Vec3};
+use crate::params::Params;
+use crate::step::{Algorithm, StepInput, StepOutput, TrackingStep};
+use crate::upe::occlusion::UpeReport;
+use crate::upe::registration::EmReport;
+use crate::upe::UpeTrackStep;
+
+/// What any algorithm's step reported, one field per kind of report.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct StepReports {
+    /// UPETrack's registration report.
+    pub em: Option<EmReport>,
+    /// UPETrack's occlusion report.
+    pub upe: Option<UpeReport>,
+    /// TrackDLO's report.
+    pub trackdlo: Option<TrackDloReport>,
+}
+
+/// One of the algorithms' steps, with its state.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum Stepper {
+    /// UPETrack.
+    Upetrack,
+    /// CPD.
+    Cpd,
+    /// TrackDLO with its state.
+    Trackdlo(TrackDloStep),
+}
+
+impl Stepper {
+    /// A fresh step of `algorithm`.
+    pub fn new(algorithm: Algorithm) -> Self {
+        match algorithm {
+            Algorithm::Upetrack => Stepper::Upetrack,
+            Algorithm::Cpd => Stepper::Cpd,
+            Algorithm::Trackdlo => Stepper::Trackdlo(TrackDloStep::default()),
+        }
+    }
+
+    /// Which algorithm this is.
+    pub fn algorithm(&self) -> Algorithm {
+        match self {
+            Stepper::Upetrack => UpeTrackStep::ALGORITHM,
+            Stepper::Cpd => CpdStep::ALGORITHM,
+            Stepper::Trackdlo(_) => TrackDloStep::ALGORITHM,
+        }
+    }
+
+    /// Called with freshly (re)initialised nodes.
+    pub fn start(&mut self, nodes: &[Vec3]) {
+        match self {
+            Stepper::Upetrack => UpeTrackStep.start(nodes),
+            Stepper::Cpd => CpdStep.start(nodes),
+            Stepper::Trackdlo(s) => s.start(nodes),
+        }
+    }
+
+    /// The step, with the algorithm's settings taken from `params`. Nodes
+    /// that come out of the wrong count or not finite are replaced by the
+    /// previous ones.
+    pub fn step(&mut self, input: &StepInput<'_>, params: &Params) -> StepOutput<StepReports> {
+        let mut out = match self {
+            Stepper::Upetrack => {
+                UpeTrackStep
+                    .step(input, &params.upetrack)
+                    .map_report(|r| StepReports {
+                        em: Some(r.em),
+                        upe: Some(r.upe),
+                        ..StepReports::default()
+                    })
+            }
+            Stepper::Cpd => CpdStep
+                .step(input, &params.cpd)
+                .map_report(|()| StepReports::default()),
+            Stepper::Trackdlo(s) => s.step(input, &params.trackdlo).map_report(|r| StepReports {
+                trackdlo: Some(r),
+                ..StepReports::default()
+            }),
+        };
+        if out.nodes.len() != input.previous.len() || !out.nodes.iter().all(math::is_finite) {
+            // Cannot happen with finite inputs; keep the last good nodes if it does.
+            out.nodes = input.previous.to_vec();
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_algorithm_has_a_step() {
+        for a in Algorithm::ALL {
+            assert_eq!(Stepper::new(a).algorithm(), a);
+        }
+    }
+}

@@ -1,0 +1,36 @@
+//! The one error type for a rejected parameter, and the range check every
+//! settings struct uses. A leaf module: each algorithm's settings validate
+//! themselves with it, and [`crate::params::Params`] composes them.
+
+/// A rejected parameter.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ParamsError {
+    /// A parameter is outside its documented range (or not finite).
+    #[error("parameter `{name}` = {value} is invalid: it must be {expected}")]
+    OutOfRange {
+        /// Field name.
+        name: &'static str,
+        /// The rejected value.
+        value: f64,
+        /// The accepted range, in words.
+        expected: &'static str,
+    },
+}
+
+/// `Ok` when `ok` holds and `value` is finite, else the error naming `name`.
+pub fn check(
+    name: &'static str,
+    value: f64,
+    ok: bool,
+    expected: &'static str,
+) -> Result<(), ParamsError> {
+    if ok && value.is_finite() {
+        Ok(())
+    } else {
+        Err(ParamsError::OutOfRange {
+            name,
+            value,
+            expected,
+        })
+    }
+}
