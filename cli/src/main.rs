@@ -101,12 +101,7 @@ fn load_params(path: Option<&str>) -> Result<Params, CliError> {
         return Ok(Params::default());
     };
     let text = std::fs::read_to_string(path).map_err(|e| CliError(format!("{path}: {e}")))?;
-    let params: Params = serde_json::from_str(&text)
-        .map_err(|e| CliError(format!("{path}: invalid parameters: {e}")))?;
-    params
-        .validate()
-        .map_err(|e| CliError(format!("{path}: {e}")))?;
-    Ok(params)
+    Ok(upetrack_io::params_file::parse_params(&text, path)?)
 }
 
 /// The algorithms of `--algorithm a,b,..` (the parameter file's when absent).

@@ -63,23 +63,7 @@ pub fn cmd_overlay(raw: &[String]) -> Result<(), CliError> {
     let (w, h) = (decoded.width as i64, decoded.height as i64);
     let mut rgb = decoded.color;
     if args.flag("depth") {
-        // Depth as a colour ramp (near red, far blue), black where invalid.
-        let valid = decoded.depth.iter().filter(|&&d| d > 0);
-        let lo = valid.clone().min().copied().unwrap_or(0) as f64;
-        let hi = valid.max().copied().unwrap_or(1) as f64;
-        for (k, &d) in decoded.depth.iter().enumerate() {
-            let c = if d == 0 {
-                [0, 0, 0]
-            } else {
-                let t = (d as f64 - lo) / (hi - lo).max(1.0);
-                [
-                    (255.0 * (1.0 - t)) as u8,
-                    (80.0 + 120.0 * (1.0 - (2.0 * t - 1.0).abs())) as u8,
-                    (255.0 * t) as u8,
-                ]
-            };
-            rgb[3 * k..3 * k + 3].copy_from_slice(&c);
-        }
+        rgb = upetrack_io::display::depth_to_rgb(&decoded.depth);
     }
     for r in seq.occlusions_at(index) {
         if let Some((x0, x1, y0, y1)) = r.clip(decoded.width, decoded.height) {

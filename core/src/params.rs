@@ -160,6 +160,13 @@ impl Params {
             (0.0..=1.0).contains(&f),
             "in [0, 1]",
         )?;
+        let rv = self.reinit_visible_fraction;
+        check(
+            "reinit_visible_fraction",
+            rv,
+            (0.0..=1.0).contains(&rv),
+            "in [0, 1]",
+        )?;
         self.upetrack.validate()?;
         self.cpd.validate()?;
         self.trackdlo.validate()
@@ -209,7 +216,13 @@ mod tests {
     #[test]
     fn invalid_values_are_rejected_by_name() {
         type Case = (&'static str, fn(&mut Params));
-        let cases: [Case; 12] = [
+        let cases: [Case; 14] = [
+            ("reinit_visible_fraction", |p| {
+                p.reinit_visible_fraction = -5.0
+            }),
+            ("reinit_visible_fraction", |p| {
+                p.reinit_visible_fraction = 1e300
+            }),
             ("cpd.beta", |p| p.cpd.beta = 0.0),
             ("trackdlo.mu", |p| p.trackdlo.mu = 1.0),
             ("trackdlo.max_iterations", |p| p.trackdlo.max_iterations = 0),

@@ -4,7 +4,7 @@
 use std::io::Read;
 
 use crate::error::SequenceError;
-use crate::source::MemorySource;
+use crate::source::{is_inside_name, MemorySource};
 
 /// Most entries accepted in one archive.
 pub const MAX_ARCHIVE_ENTRIES: usize = 200_000;
@@ -71,11 +71,7 @@ pub fn unpack_zip(bytes: &[u8], name: &str) -> Result<MemorySource, SequenceErro
             continue;
         }
         let raw_name = entry.name().to_string();
-        let unsafe_name = raw_name.starts_with('/')
-            || raw_name.starts_with('\\')
-            || raw_name.split(['/', '\\']).any(|c| c == "..")
-            || raw_name.chars().nth(1) == Some(':');
-        if unsafe_name {
+        if !is_inside_name(&raw_name) {
             return Err(invalid(format!(
                 "entry `{raw_name}` points outside the archive: refused"
             )));

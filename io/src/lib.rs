@@ -5,9 +5,11 @@
 
 pub mod archive;
 pub mod decode;
+pub mod display;
 pub mod error;
 pub mod eval;
 pub mod open;
+pub mod params_file;
 pub mod result;
 pub mod run;
 pub mod sequence;

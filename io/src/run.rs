@@ -1,7 +1,7 @@
 //! Running the tracker over a whole sequence, frame by frame, with a clock
 //! supplied by the caller (the core has none; the browser's differs).
 
-use upetrack::tracker::FrameStatus;
+use upetrack::tracker::{FrameOutput, FrameStatus, Observation};
 use upetrack::{Params, Tracker};
 
 use crate::error::SequenceError;
@@ -9,8 +9,41 @@ use crate::result::{FrameRecord, TrackResult};
 use crate::sequence::Sequence;
 use crate::source::Source;
 
-/// Tracks one decoded frame and returns its record. `now_ms` is read around
-/// the stages to fill `track_ms` and `total_ms`.
+/// One frame through the tracker with the stages timed.
+#[derive(Debug, Clone)]
+pub struct TimedFrame {
+    /// The mask and cloud.
+    pub observation: Observation,
+    /// The tracker's output.
+    pub output: FrameOutput,
+    /// The tracking step alone, ms.
+    pub track_ms: f64,
+    /// Segmentation, point cloud and tracking step, ms.
+    pub total_ms: f64,
+}
+
+/// Observes and updates one decoded frame, reading `now_ms` around the
+/// stages (the one definition of `track_ms` and `total_ms`).
+pub fn run_frame(
+    tracker: &mut Tracker,
+    frame: &upetrack::Frame<'_>,
+    occlusions: &[upetrack::Rect],
+    now_ms: &mut dyn FnMut() -> f64,
+) -> Result<TimedFrame, upetrack::tracker::TrackerError> {
+    let t0 = now_ms();
+    let observation = tracker.observe(frame, occlusions)?;
+    let t1 = now_ms();
+    let output = tracker.update(frame, &observation);
+    let t2 = now_ms();
+    Ok(TimedFrame {
+        observation,
+        output,
+        track_ms: t2 - t1,
+        total_ms: t2 - t0,
+    })
+}
+
+/// Tracks one decoded frame and returns its record.
 pub fn track_frame(
     tracker: &mut Tracker,
     index: usize,
@@ -18,21 +51,17 @@ pub fn track_frame(
     occlusions: &[upetrack::Rect],
     now_ms: &mut dyn FnMut() -> f64,
 ) -> Result<FrameRecord, upetrack::tracker::TrackerError> {
-    let t0 = now_ms();
-    let obs = tracker.observe(frame, occlusions)?;
-    let t1 = now_ms();
-    let out = tracker.update(frame, &obs);
-    let t2 = now_ms();
-    let reason = match &out.status {
+    let t = run_frame(tracker, frame, occlusions, now_ms)?;
+    let reason = match &t.output.status {
         FrameStatus::Lost(r) => Some(r.to_string()),
         _ => None,
     };
     Ok(FrameRecord {
         frame: index,
-        nodes: out.nodes.iter().map(|p| [p.x, p.y, p.z]).collect(),
-        visible: out.visible,
-        track_ms: t2 - t1,
-        total_ms: t2 - t0,
+        nodes: t.output.nodes.iter().map(|p| [p.x, p.y, p.z]).collect(),
+        visible: t.output.visible,
+        track_ms: t.track_ms,
+        total_ms: t.total_ms,
         lost: reason.is_some(),
         reason,
     })

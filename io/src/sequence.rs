@@ -7,7 +7,7 @@ use upetrack::{CameraIntrinsics, Frame, HsvRange, Rect};
 
 use crate::decode::{decode_color, decode_depth, RgbImage};
 use crate::error::SequenceError;
-use crate::source::Source;
+use crate::source::{is_inside_name, Source};
 
 /// Most frames accepted in one sequence.
 pub const MAX_FRAMES: usize = 100_000;
@@ -107,6 +107,77 @@ pub struct DloConfig {
     /// Ground-truth file name.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub groundtruth: Option<String>,
+}
+
+impl DloConfig {
+    /// Parses `dlo.json`'s bytes (`path` names it in errors) and checks it.
+    pub fn parse(bytes: &[u8], path: &str) -> Result<Self, SequenceError> {
+        if bytes.len() > MAX_JSON_BYTES {
+            return Err(SequenceError::too_large(
+                path,
+                "JSON size in bytes",
+                bytes.len() as u64,
+                MAX_JSON_BYTES as u64,
+            ));
+        }
+        let config: Self = serde_json::from_slice(bytes).map_err(|e| SequenceError::Json {
+            path: path.to_string(),
+            message: e.to_string(),
+        })?;
+        config.check(path)?;
+        Ok(config)
+    }
+
+    /// Checks the HSV range, the occlusions and the ground-truth name, and
+    /// returns the HSV range in force (the default when absent).
+    pub fn check(&self, path: &str) -> Result<HsvRange, SequenceError> {
+        let hsv = match &self.segmentation {
+            Some(s) => {
+                let r = HsvRange {
+                    lower: s.hsv_lower,
+                    upper: s.hsv_upper,
+                };
+                r.validate()
+                    .map_err(|e| SequenceError::invalid(path, format!("segmentation: {e}")))?;
+                r
+            }
+            None => HsvRange::default(),
+        };
+        if self.occlusions.len() > MAX_OCCLUSIONS {
+            return Err(SequenceError::too_large(
+                path,
+                "number of occlusions",
+                self.occlusions.len() as u64,
+                MAX_OCCLUSIONS as u64,
+            ));
+        }
+        for (i, o) in self.occlusions.iter().enumerate() {
+            if o.frames[0] > o.frames[1] {
+                return Err(SequenceError::invalid(
+                    path,
+                    format!("occlusions[{i}]: frames {:?} run backwards", o.frames),
+                ));
+            }
+            if o.rect[2] < 0 || o.rect[3] < 0 {
+                return Err(SequenceError::invalid(
+                    path,
+                    format!("occlusions[{i}]: negative width or height in {:?}", o.rect),
+                ));
+            }
+        }
+        if let Some(gt) = &self.groundtruth {
+            if !is_inside_name(gt) {
+                return Err(SequenceError::invalid(
+                    path,
+                    format!(
+                        "groundtruth {gt:?} must name a file inside the sequence folder \
+                         (a relative path without `..`)"
+                    ),
+                ));
+            }
+        }
+        Ok(hsv)
+    }
 }
 
 /// One frame of `groundtruth.json`.
@@ -259,7 +330,7 @@ impl<S: Source> Sequence<S> {
         let camera = camera_from_file(&intr, &source.display(intr_path))?;
 
         let config: DloConfig = if source.is_file("dlo.json") {
-            read_json(&source, "dlo.json")?
+            DloConfig::parse(&source.read("dlo.json")?, &source.display("dlo.json"))?
         } else {
             DloConfig::default()
         };
@@ -282,40 +353,7 @@ impl<S: Source> Sequence<S> {
                 format!("fps {fps} must be in (0, 10000]"),
             ));
         }
-        let hsv = match &config.segmentation {
-            Some(s) => {
-                let r = HsvRange {
-                    lower: s.hsv_lower,
-                    upper: s.hsv_upper,
-                };
-                r.validate()
-                    .map_err(|e| SequenceError::invalid(&dlo_path, format!("segmentation: {e}")))?;
-                r
-            }
-            None => HsvRange::default(),
-        };
-        if config.occlusions.len() > MAX_OCCLUSIONS {
-            return Err(SequenceError::too_large(
-                dlo_path,
-                "number of occlusions",
-                config.occlusions.len() as u64,
-                MAX_OCCLUSIONS as u64,
-            ));
-        }
-        for (i, o) in config.occlusions.iter().enumerate() {
-            if o.frames[0] > o.frames[1] {
-                return Err(SequenceError::invalid(
-                    &dlo_path,
-                    format!("occlusions[{i}]: frames {:?} run backwards", o.frames),
-                ));
-            }
-            if o.rect[2] < 0 || o.rect[3] < 0 {
-                return Err(SequenceError::invalid(
-                    &dlo_path,
-                    format!("occlusions[{i}]: negative width or height in {:?}", o.rect),
-                ));
-            }
-        }
+        let hsv = config.check(&dlo_path)?;
 
         let color_dir = COLOR_DIRS
             .into_iter()

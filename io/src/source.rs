@@ -54,7 +54,8 @@ impl Source for FolderSource {
         let mut names = Vec::new();
         for entry in std::fs::read_dir(&p).map_err(io)? {
             let entry = entry.map_err(io)?;
-            if entry.file_type().map(|t| t.is_file()).unwrap_or(false) {
+            // Follows symbolic links: a folder of linked frames is a folder of frames.
+            if std::fs::metadata(entry.path()).is_ok_and(|m| m.is_file()) {
                 if let Some(name) = entry.file_name().to_str() {
                     names.push(name.to_string());
                 }
@@ -139,25 +140,39 @@ impl MemorySource {
     /// When every file sits under one top folder that is not itself part of
     /// the layout (`myseq/color/...`), drops that folder from every path.
     pub fn strip_common_root(&mut self) {
-        let known =
-            |s: &str| matches!(s, "color" | "rgb" | "image" | "depth") || s.ends_with(".json");
-        loop {
-            let mut tops = self.files.keys().map(|k| k.split('/').next().unwrap_or(""));
-            let Some(first) = tops.next() else { return };
-            if known(first) || !self.files.keys().all(|k| k.contains('/')) {
-                return;
-            }
-            let first = first.to_string();
-            if !tops.all(|t| t == first) {
-                return;
-            }
-            let prefix = format!("{first}/");
-            self.files = std::mem::take(&mut self.files)
-                .into_iter()
-                .map(|(k, v)| (k[prefix.len()..].to_string(), v))
-                .collect();
-        }
+        let Some(root) = common_root(self.files.keys().map(String::as_str)) else {
+            return;
+        };
+        let prefix = format!("{root}/");
+        self.files = std::mem::take(&mut self.files)
+            .into_iter()
+            .map(|(k, v)| (k[prefix.len()..].to_string(), v))
+            .collect();
     }
+}
+
+/// The folders every path sits under that are not part of a sequence's
+/// layout (`myseq` in `myseq/color/0.jpg`, `a/b` when nested), or `None`.
+/// Paths are `/`-separated and relative.
+pub fn common_root<'a>(paths: impl IntoIterator<Item = &'a str>) -> Option<String> {
+    let known = |s: &str| matches!(s, "color" | "rgb" | "image" | "depth") || s.ends_with(".json");
+    let paths: Vec<Vec<&str>> = paths
+        .into_iter()
+        .map(|p| p.split('/').filter(|s| !s.is_empty()).collect())
+        .collect();
+    let mut depth = 0;
+    while let Some(first) = paths.first().and_then(|p| p.get(depth)) {
+        // A folder only: every path must go deeper than it.
+        if known(first)
+            || !paths
+                .iter()
+                .all(|p| p.len() > depth + 1 && p[depth] == *first)
+        {
+            break;
+        }
+        depth += 1;
+    }
+    (depth > 0).then(|| paths[0][..depth].join("/"))
 }
 
 impl Source for MemorySource {
@@ -222,6 +237,17 @@ impl Source for Box<dyn Source> {
     }
 }
 
+/// `true` for a relative path that stays inside its folder: not empty, not
+/// absolute (nor a Windows drive or UNC path), no `..` component.
+pub fn is_inside_name(name: &str) -> bool {
+    let parts: Vec<&str> = name.split(['/', '\\']).collect();
+    !name.is_empty()
+        && !name.starts_with(['/', '\\'])
+        && !parts.first().is_some_and(|p| p.contains(':'))
+        && !parts.contains(&"..")
+        && parts.iter().any(|p| !p.is_empty() && *p != ".")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -238,5 +264,37 @@ mod tests {
         assert_eq!(names, ["000000.jpg", "000001.jpg"]);
         assert!(m.is_dir("color") && m.is_file("camera_intrinsic.json"));
         assert_eq!(m.read("color/000001.jpg").expect("read"), vec![1]);
+    }
+
+    #[test]
+    fn common_root_is_the_folders_above_the_layout() {
+        assert_eq!(
+            common_root(["a/b/color/0.jpg", "a/b/dlo.json"]),
+            Some("a/b".into())
+        );
+        assert_eq!(common_root(["color/0.jpg", "dlo.json"]), None);
+        assert_eq!(common_root(["x/color/0.jpg", "y/color/0.jpg"]), None);
+        // A file at the top: nothing is a folder of everything.
+        assert_eq!(common_root(["x/color/0.jpg", "readme.txt"]), None);
+        assert_eq!(common_root(["seq/notes.txt"]), Some("seq".into()));
+        assert_eq!(common_root([]), None);
+    }
+
+    #[test]
+    fn names_inside_the_folder_are_told_from_those_outside() {
+        for ok in ["groundtruth.json", "gt/frames.json", "./gt.json"] {
+            assert!(is_inside_name(ok), "{ok}");
+        }
+        for bad in [
+            "/etc/passwd",
+            "../gt.json",
+            "a/../../b",
+            "C:\\gt.json",
+            "\\\\host\\x",
+            "",
+            ".",
+        ] {
+            assert!(!is_inside_name(bad), "{bad}");
+        }
     }
 }

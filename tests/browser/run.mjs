@@ -42,9 +42,15 @@ const context = await chromium.launchPersistentContext(fs.mkdtempSync(path.join(
 let passed = 0, failed = 0;
 const consoleErrors = [];
 const requests = [];
-async function newPage(query = '') {
+// Every error the page shows in its banner is also a console error; a test
+// that provokes some says so with expectErrors(page), and only those pages'
+// console errors are allowed.
+const expecting = new WeakSet();
+function expectErrors(page) { expecting.add(page); }
+async function newPage(query = '', { errors = false } = {}) {
   const page = await context.newPage();
-  page.on('console', (m) => { if (m.type() === 'error') consoleErrors.push(m.text()); });
+  if (errors) expectErrors(page);
+  page.on('console', (m) => { if (m.type() === 'error' && !expecting.has(page)) consoleErrors.push(m.text()); });
   page.on('pageerror', (e) => consoleErrors.push(String(e)));
   page.on('request', (r) => requests.push(r.url()));
   await page.goto(`${origin}/web/index.html${query}`);
@@ -77,7 +83,7 @@ await test('page loads, default sample plays, nodes lie on the rope', async () =
   await page.close();
 });
 
-await test('wasm and native give the same nodes (within 1e-6 m)', async () => {
+await test('wasm and native give bit-identical nodes', async () => {
   const page = await newPage('?autoplay=0');
   const web = await page.evaluate(() => window.upetrack.trackAll());
   const ref = JSON.parse(fs.readFileSync(nativeJson, 'utf8'));
@@ -85,7 +91,7 @@ await test('wasm and native give the same nodes (within 1e-6 m)', async () => {
   let worst = 0;
   ref.frames.forEach((f, k) => f.nodes.forEach((p, j) => p.forEach((c, d) => { worst = Math.max(worst, Math.abs(c - web.frames[k].nodes[j][d])); })));
   console.log(`     largest difference ${worst.toExponential(2)} m over ${ref.frames.length} frames`);
-  assert(worst < 1e-6, `largest difference ${worst}`);
+  assert(worst === 0, `largest difference ${worst}`);
   const t = web.frames.slice(1).map((f) => f.total_ms).sort((a, b) => a - b);
   const tr = web.frames.slice(1).map((f) => f.track_ms).sort((a, b) => a - b);
   console.log(`     in Chromium: median track_ms ${tr[tr.length >> 1].toFixed(3)}, median total_ms ${t[t.length >> 1].toFixed(3)}`);
@@ -115,6 +121,7 @@ await test('a sequence loads from a .zip and tracks', async () => {
 
 await test('a bad file and a wrong folder show a message and the page keeps working', async () => {
   const page = await newPage('?autoplay=0');
+  expectErrors(page);
   const bad = path.join(tmp, 'notes.zip');
   fs.writeFileSync(bad, 'this is not a zip');
   await page.setInputFiles('#zip', bad);
@@ -149,6 +156,7 @@ await test('a bad file and a wrong folder show a message and the page keeps work
 
 await test('dropping a corrupt file or a folder that is not a sequence shows a message', async () => {
   const page = await newPage('?autoplay=0');
+  expectErrors(page);
   const drop = (files) => page.evaluate((files) => {
     const dt = new DataTransfer();
     for (const [name, text] of files) dt.items.add(new File([text], name));
@@ -188,24 +196,39 @@ await test('playback with decoding and tracking: same nodes as native; rate prin
   const ref = JSON.parse(fs.readFileSync(nativeJson, 'utf8'));
   let worst = 0;
   ref.frames.forEach((f, k) => f.nodes.forEach((p, j) => p.forEach((c, d) => { worst = Math.max(worst, Math.abs(c - r.result.frames[k].nodes[j][d])); })));
-  assert(r.result.frames.length === ref.frames.length && worst < 1e-6, `played result differs from native by ${worst}`);
+  assert(r.result.frames.length === ref.frames.length && worst === 0, `played result differs from native by ${worst}`);
   await page.close();
 });
 
 await test('going back on the timeline and changing a setting re-tracks from that frame', async () => {
   const page = await newPage('?sample=dynamic-pull&autoplay=0');
-  const same = await page.evaluate(async () => {
+  const r = await page.evaluate(async () => {
     const u = window.upetrack;
-    const first = (await u.trackAll()).frames.map((f) => f.nodes);
+    const nodes = async () => (await u.trackAll()).frames.map((f) => JSON.stringify(f.nodes));
+    const setRadius = async (mm) => {
+      document.getElementById('p-visibility_radius').value = String(mm);
+      document.getElementById('params').dispatchEvent(new Event('change'));
+      await new Promise((res) => setTimeout(res, 100));
+      await u.state.busy;
+    };
+    const first = await nodes();
     await u.goTo(5);
-    // Setting the same parameters again re-tracks frames 5.. from frame 4's state.
-    document.getElementById('params').dispatchEvent(new Event('change'));
-    await new Promise((r) => setTimeout(r, 200));
-    await u.state.busy;
-    const again = (await u.trackAll()).frames.map((f) => f.nodes);
-    return JSON.stringify(first) === JSON.stringify(again);
+    await setRadius(10);
+    const trackedAfterChange = u.state.tracked;
+    const radius = u.state.params.visibility_radius;
+    const changed = await nodes();
+    await u.goTo(5);
+    await setRadius(20);
+    const back = await nodes();
+    return { first, changed, back, trackedAfterChange, radius, errors: u.state.errors };
   });
-  assert(same, 're-tracked frames differ from the first pass');
+  assert(r.errors.length === 0, `errors: ${r.errors}`);
+  assert(r.radius === 0.01, `the parameter did not reach the tracker: r_vis ${r.radius}`);
+  assert(r.trackedAfterChange === 5, `frames 5.. were not tracked again (tracked ${r.trackedAfterChange})`);
+  const same = (a, b, from, to) => a.slice(from, to).every((x, k) => x === b[from + k]);
+  assert(same(r.first, r.changed, 0, 5), 'frames before the change must keep their nodes');
+  assert(!same(r.first, r.changed, 5, r.first.length), 'r_vis 10 mm changed no frame after the change');
+  assert(same(r.first, r.back, 0, r.first.length), 'back at 20 mm, the re-tracked frames differ from the first pass');
   await page.close();
 });
 
@@ -228,7 +251,8 @@ await test('a drawn occlusion hides nodes, which are still estimated near the tr
   const meanErr = out.errors.reduce((a, b) => a + b, 0) / out.errors.length;
   console.log(`     rect ${out.rect}: up to ${maxHidden} hidden nodes, mean error ${meanErr.toFixed(2)} mm`);
   assert(maxHidden >= 3, `only ${maxHidden} nodes hidden`);
-  assert(meanErr < 20, `mean error ${meanErr} mm`);
+  // docs/testing.md reports 3.5 mm for this rectangle on this sample.
+  assert(meanErr < 5, `mean error ${meanErr} mm`);
   await page.screenshot({ path: path.join(artifacts, 'drawn-occlusion.png') });
   await page.close();
 });
@@ -258,8 +282,8 @@ await test('two algorithms on one sequence: each matches its native run, both dr
   const dMain = worst(refs.upetrack.frames.map((f) => f.nodes), got.main);
   const dSecond = worst(refs.trackdlo.frames.map((f) => f.nodes), got.second);
   console.log(`     differences from native: UPETrack ${dMain.toExponential(2)} m, TrackDLO ${dSecond.toExponential(2)} m`);
-  assert(got.main.length === refs.upetrack.frames.length && dMain < 1e-6, `UPETrack differs by ${dMain}`);
-  assert(got.second.length === refs.trackdlo.frames.length && dSecond < 1e-6, `TrackDLO differs by ${dSecond}`);
+  assert(got.main.length === refs.upetrack.frames.length && dMain === 0, `UPETrack differs by ${dMain}`);
+  assert(got.second.length === refs.trackdlo.frames.length && dSecond === 0, `TrackDLO differs by ${dSecond}`);
   assert(/UPETrack mean/.test(got.label) && /TrackDLO mean/.test(got.label), `plot label: ${got.label}`);
   assert(got.errors.every(([a, b]) => Number.isFinite(a) && Number.isFinite(b)), 'both errors on every frame');
   await page.screenshot({ path: path.join(artifacts, 'compare.png') });
@@ -274,6 +298,62 @@ await test('two algorithms on one sequence: each matches its native run, both dr
     return { tracked: u.state.tracked, label: document.getElementById('plot-label').textContent };
   });
   assert(switched.tracked === refs.upetrack.frames.length - 1 && /CPD mean/.test(switched.label), `after switching: ${JSON.stringify(switched)}`);
+  await page.close();
+});
+
+// What the command says about a bad value, without its file name.
+function nativeMessage(args) {
+  try { execFileSync(native, args, { stdio: 'pipe' }); } catch (e) { return String(e.stderr); }
+  throw new Error(`the command accepted ${args.join(' ')}`);
+}
+const afterPath = (m) => m.slice(m.indexOf(': ') + 2).replace(/ at line \d+ column \d+/, '').trim();
+
+await test('out-of-range input is refused with the command\'s message, never wrapped', async () => {
+  // A parameter from the URL.
+  const pfile = path.join(tmp, 'bad-params.json');
+  fs.writeFileSync(pfile, JSON.stringify({ visibility_radius: -1 }));
+  const cmdParams = afterPath(nativeMessage(['track', path.join(root, 'samples/static-s'), '--out', path.join(tmp, 'x.json'), '--params', pfile]).split('\n')[0].replace(/^error: /, ''));
+  let page = await newPage('?autoplay=0&p.visibility_radius=-1&speed=3', { errors: true });
+  let m = await messageOf(page);
+  assert(m.includes(cmdParams), `page: "${m}", command: "${cmdParams}"`);
+  assert(m.includes('speed=3 is not one of'), m);
+  const radius = await page.evaluate(() => window.upetrack.state.params.visibility_radius);
+  assert(radius === 0.02, `the bad value was used: ${radius}`);
+  await page.close();
+  // An HSV bound of 300, typed into the panel and written in a dlo.json.
+  const seq = path.join(tmp, 'hsv300');
+  fs.cpSync(path.join(root, 'samples/static-s'), seq, { recursive: true });
+  const dlo = JSON.parse(fs.readFileSync(path.join(seq, 'dlo.json'), 'utf8'));
+  dlo.segmentation.hsv_upper = [130, 300, 255];
+  fs.writeFileSync(path.join(seq, 'dlo.json'), JSON.stringify(dlo));
+  const cmdHsv = afterPath(nativeMessage(['track', seq, '--out', path.join(tmp, 'x.json')]).split('\n')[0].replace(/^error: /, ''));
+  page = await newPage('?autoplay=0');
+  expectErrors(page);
+  const got = await page.evaluate(async () => {
+    const u = window.upetrack;
+    const before = JSON.stringify(u.state.hsv);
+    document.getElementById('s-hi').value = '300';
+    document.getElementById('hsv').dispatchEvent(new Event('change'));
+    await new Promise((r) => setTimeout(r, 100));
+    await u.state.busy;
+    let rect = '';
+    try { await u.addRect([10, 10, 2 ** 31 + 5, 20.5]); } catch (e) { rect = e.message; }
+    return { before, after: JSON.stringify(u.state.hsv), shown: document.getElementById('s-hi').value, rects: u.state.userRects.length, rect };
+  });
+  m = await messageOf(page);
+  assert(m.includes(cmdHsv), `page: "${m}", command: "${cmdHsv}"`);
+  assert(got.after === got.before && got.shown !== '300', `HSV after a refused value: ${JSON.stringify(got)}`);
+  assert(got.rects === 0 && got.rect.includes('invalid'), `a fractional rectangle was taken: ${JSON.stringify(got)}`);
+  await page.close();
+});
+
+await test('embed=1 shows the image and the transport only', async () => {
+  const page = await newPage('?autoplay=0&embed=1');
+  const shown = await page.evaluate(() => Object.fromEntries(['loaders', 'side', 'stats', 'plot', 'display', 'transport', 'canvas']
+    .map((id) => [id, document.getElementById(id).getBoundingClientRect().height > 0])));
+  assert(shown.canvas && shown.transport, `image or transport hidden: ${JSON.stringify(shown)}`);
+  assert(!shown.loaders && !shown.side && !shown.stats && !shown.plot && !shown.display, `more than image and transport: ${JSON.stringify(shown)}`);
+  await page.screenshot({ path: path.join(artifacts, 'embed.png') });
   await page.close();
 });
 

@@ -8,12 +8,72 @@ use upetrack::metrics::{frame_error, frame_error_px};
 use upetrack::tracker::{FrameOutput, FrameStatus, Observation};
 use upetrack::{CameraIntrinsics, Frame, HsvRange, Params, Rect, Tracker, Vec3};
 use upetrack_io::decode::{decode_color, decode_depth};
-use upetrack_io::sequence::{OcclusionConfig, Sequence};
+use upetrack_io::run::run_frame;
+use upetrack_io::sequence::{DloConfig, OcclusionConfig, Sequence};
 use upetrack_io::source::{MemorySource, Source};
 use wasm_bindgen::prelude::*;
 
 fn js_err(e: impl std::fmt::Display) -> JsError {
     JsError::new(&e.to_string())
+}
+
+/// The largest pixel coordinate a rectangle may give (2^53: every whole
+/// number up to it is exact in a JS number).
+const MAX_RECT_COORDINATE: f64 = 9_007_199_254_740_992.0;
+
+/// Flat `[x, y, w, h, ...]` as rectangles; each value must be a whole number.
+fn rects_of(flat: &[f64]) -> Result<Vec<Rect>, JsError> {
+    if flat.len() % 4 != 0 {
+        return Err(JsError::new(&format!(
+            "occlusion rectangles need 4 values each, got {}",
+            flat.len()
+        )));
+    }
+    let whole = |v: f64| {
+        if v.fract() == 0.0 && v.abs() <= MAX_RECT_COORDINATE {
+            Ok(v as i64)
+        } else {
+            Err(JsError::new(&format!(
+                "occlusion rectangle value {v} is not a whole number of pixels"
+            )))
+        }
+    };
+    flat.chunks_exact(4)
+        .map(|r| {
+            Ok(Rect {
+                x: whole(r[0])?,
+                y: whole(r[1])?,
+                w: whole(r[2])?,
+                h: whole(r[3])?,
+            })
+        })
+        .collect()
+}
+
+/// Points projected with `camera`, flat `[u, v, ...]`, NaN where a point
+/// cannot be projected (behind the camera, not finite).
+fn project_all(camera: &CameraIntrinsics, points: &[Vec3]) -> Vec<f32> {
+    points
+        .iter()
+        .flat_map(|p| match camera.project(p) {
+            Some(q) => [q.x as f32, q.y as f32],
+            None => [f32::NAN, f32::NAN],
+        })
+        .collect()
+}
+
+/// RGB8 as opaque RGBA8, for an `ImageData`.
+fn rgba_of(rgb: &[u8]) -> Vec<u8> {
+    rgb.chunks_exact(3)
+        .flat_map(|p| [p[0], p[1], p[2], 255])
+        .collect()
+}
+
+/// Flat `[x, y, z, ...]` as points.
+fn points_of(flat: &[f64]) -> Vec<Vec3> {
+    flat.chunks_exact(3)
+        .map(|c| Vec3::new(c[0], c[1], c[2]))
+        .collect()
 }
 
 /// Milliseconds from the page's (or worker's) `performance.now()`, or 0.
@@ -137,16 +197,12 @@ impl WasmTracker {
         to_js(self.tracker.params())
     }
 
-    /// Replaces the HSV range (`[h, s, v]` lower and upper, OpenCV convention).
+    /// Replaces the HSV range: `{ lower: [h, s, v], upper: [h, s, v] }`,
+    /// OpenCV convention. A value outside 0..=255 is refused, never wrapped.
     #[wasm_bindgen(js_name = setHsv)]
-    pub fn set_hsv(&mut self, lower: &[u8], upper: &[u8]) -> Result<(), JsError> {
-        let (Ok(lower), Ok(upper)) = (<[u8; 3]>::try_from(lower), <[u8; 3]>::try_from(upper))
-        else {
-            return Err(JsError::new("HSV bounds must have three values each"));
-        };
-        self.tracker
-            .set_hsv(HsvRange { lower, upper })
-            .map_err(js_err)
+    pub fn set_hsv(&mut self, range: JsValue) -> Result<(), JsError> {
+        let range: HsvRange = serde_wasm_bindgen::from_value(range).map_err(js_err)?;
+        self.tracker.set_hsv(range).map_err(js_err)
     }
 
     /// The state after the last frame, to return to it with `restore`.
@@ -172,7 +228,8 @@ impl WasmTracker {
     }
 
     /// Tracks one frame. `rgb` is RGB8, `depth` 16-bit units, `occlusions`
-    /// flat `[x, y, w, h, ...]` rectangles blacked out before segmentation.
+    /// flat `[x, y, w, h, ...]` rectangles blacked out before segmentation
+    /// (whole numbers of pixels; anything else is refused, never wrapped).
     pub fn track(
         &mut self,
         width: u32,
@@ -180,31 +237,13 @@ impl WasmTracker {
         rgb: &[u8],
         depth: &[u16],
         depth_scale: f64,
-        occlusions: &[i32],
+        occlusions: &[f64],
     ) -> Result<FrameResult, JsError> {
         let frame = Frame::new(width, height, rgb, depth, depth_scale).map_err(js_err)?;
-        let rects: Vec<Rect> = occlusions
-            .chunks_exact(4)
-            .map(|r| Rect {
-                x: r[0] as i64,
-                y: r[1] as i64,
-                w: r[2] as i64,
-                h: r[3] as i64,
-            })
-            .collect();
-        let t0 = now_ms();
-        let obs = self.tracker.observe(&frame, &rects).map_err(js_err)?;
-        let t1 = now_ms();
-        let out = self.tracker.update(&frame, &obs);
-        let t2 = now_ms();
-        let cam = *self.tracker.camera();
-        let mut nodes_px = Vec::with_capacity(out.nodes.len() * 2);
-        for p in &out.nodes {
-            match cam.project(p) {
-                Some(q) => nodes_px.extend([q.x as f32, q.y as f32]),
-                None => nodes_px.extend([f32::NAN, f32::NAN]),
-            }
-        }
+        let rects = rects_of(occlusions)?;
+        let timed = run_frame(&mut self.tracker, &frame, &rects, &mut now_ms).map_err(js_err)?;
+        let (obs, out) = (timed.observation, timed.output);
+        let nodes_px = project_all(self.tracker.camera(), &out.nodes);
         let (status, reason) = match &out.status {
             FrameStatus::Initialised => ("initialised", None),
             FrameStatus::Tracked => ("tracked", None),
@@ -216,8 +255,8 @@ impl WasmTracker {
             visible: out.visible.iter().map(|&v| v as u8).collect(),
             status: status.into(),
             reason,
-            track_ms: t2 - t1,
-            total_ms: t2 - t0,
+            track_ms: timed.track_ms,
+            total_ms: timed.total_ms,
             cloud_points: obs.cloud.len() as u32,
         };
         self.last_obs = Some(obs);
@@ -232,7 +271,7 @@ impl WasmTracker {
         &mut self,
         frame: &DecodedFrame,
         depth_scale: f64,
-        occlusions: &[i32],
+        occlusions: &[f64],
     ) -> Result<FrameResult, JsError> {
         self.track(
             frame.width,
@@ -259,10 +298,7 @@ impl WasmTracker {
         let Some(out) = &self.last else {
             return Vec::new();
         };
-        let gt: Vec<Vec3> = truth
-            .chunks_exact(3)
-            .map(|c| Vec3::new(c[0], c[1], c[2]))
-            .collect();
+        let gt = points_of(truth);
         match (
             frame_error(&out.nodes, &gt),
             frame_error_px(&out.nodes, &gt, self.tracker.camera()),
@@ -294,12 +330,7 @@ impl DecodedFrame {
     /// RGBA8 bytes, for an ImageData.
     #[wasm_bindgen(getter)]
     pub fn rgba(&self) -> js_sys::Uint8ClampedArray {
-        let rgba: Vec<u8> = self
-            .rgb
-            .chunks_exact(3)
-            .flat_map(|p| [p[0], p[1], p[2], 255])
-            .collect();
-        js_sys::Uint8ClampedArray::from(&rgba[..])
+        js_sys::Uint8ClampedArray::from(&rgba_of(&self.rgb)[..])
     }
     /// Depth units.
     #[wasm_bindgen(getter)]
@@ -414,6 +445,71 @@ pub fn read_sequence_info(
     };
     info.serialize(&serde_wasm_bindgen::Serializer::json_compatible())
         .map_err(js_err)
+}
+
+/// Points (flat metres) projected to pixels with `camera`
+/// (`{width, height, fx, fy, cx, cy}`): flat `[u, v, ...]`, NaN where a
+/// point is behind the camera or not finite.
+#[wasm_bindgen(js_name = projectPoints)]
+pub fn project_points(camera: JsValue, points: &[f64]) -> Result<Vec<f32>, JsError> {
+    let camera: CameraIntrinsics = serde_wasm_bindgen::from_value(camera).map_err(js_err)?;
+    Ok(project_all(&camera, &points_of(points)))
+}
+
+/// OpenCV's 8-bit HSV of one RGB pixel (the core's conversion).
+#[wasm_bindgen(js_name = rgbToHsv)]
+pub fn rgb_to_hsv(r: u8, g: u8, b: u8) -> Vec<u8> {
+    upetrack::perception::segmentation::rgb_to_hsv([r, g, b]).to_vec()
+}
+
+/// The HSV range picked around a clicked pixel's colour: `{lower, upper}`.
+#[wasm_bindgen(js_name = hsvRangeAround)]
+pub fn hsv_range_around(r: u8, g: u8, b: u8) -> Result<JsValue, JsError> {
+    to_js(&HsvRange::around([r, g, b]))
+}
+
+/// Mean, median and quartiles of a series (as `upetrack eval` computes
+/// them): `{mean, median, q1, q3}`, NaN for an empty series.
+#[wasm_bindgen(js_name = errorStats)]
+pub fn error_stats(values: &[f64]) -> Result<JsValue, JsError> {
+    to_js(&upetrack_io::eval::ErrorStats::of(values))
+}
+
+/// The folders above a sequence's layout that every path shares (`myseq`
+/// of `myseq/color/0.jpg`), or `undefined`: strip `root + "/"` from each.
+#[wasm_bindgen(js_name = commonRoot)]
+pub fn common_root(paths: Vec<String>) -> Option<String> {
+    upetrack_io::source::common_root(paths.iter().map(String::as_str))
+}
+
+/// Checks `dlo.json` text as the command does (same messages) and returns
+/// `{hsv: {lower, upper}, occlusions}`.
+#[wasm_bindgen(js_name = checkDlo)]
+pub fn check_dlo(text: &str) -> Result<JsValue, JsError> {
+    let config = DloConfig::parse(text.as_bytes(), "dlo.json").map_err(js_err)?;
+    let hsv = config.check("dlo.json").map_err(js_err)?;
+    #[derive(Serialize)]
+    struct Checked {
+        hsv: HsvRange,
+        occlusions: Vec<OcclusionConfig>,
+    }
+    to_js(&Checked {
+        hsv,
+        occlusions: config.occlusions,
+    })
+}
+
+/// Parses and checks parameters given as JSON text (any subset of the
+/// fields), as the command's `--params` does; returns every field.
+#[wasm_bindgen(js_name = parseParams)]
+pub fn parse_params(text: &str) -> Result<JsValue, JsError> {
+    to_js(&upetrack_io::params_file::parse_params(text, "parameters").map_err(js_err)?)
+}
+
+/// Depth as RGBA8 for display, with the command's `overlay --depth` ramp.
+#[wasm_bindgen(js_name = depthRgba)]
+pub fn depth_rgba(depth: &[u16]) -> js_sys::Uint8ClampedArray {
+    js_sys::Uint8ClampedArray::from(&rgba_of(&upetrack_io::display::depth_to_rgb(depth))[..])
 }
 
 mod serde_bytes_compat {

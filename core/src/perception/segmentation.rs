@@ -10,6 +10,18 @@ use super::frame::Frame;
 /// Largest hue value in OpenCV's 8-bit convention.
 pub const HUE_MAX: u8 = 179;
 
+/// Hue half-width of the range picked around a clicked colour (OpenCV
+/// units, 2 degrees each): 12 covers a rope's shading on a D435i image.
+pub const PICK_HUE_HALF_WIDTH: u8 = 12;
+/// How far below the clicked saturation the picked range reaches.
+pub const PICK_SATURATION_BELOW: u8 = 70;
+/// How far below the clicked value the picked range reaches (shadows).
+pub const PICK_VALUE_BELOW: u8 = 90;
+/// Lowest saturation a picked range starts at: greys never pass.
+pub const PICK_MIN_SATURATION: u8 = 40;
+/// Lowest value a picked range starts at: black never passes.
+pub const PICK_MIN_VALUE: u8 = 20;
+
 /// Errors in segmentation settings.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SegmentationError {
@@ -70,6 +82,25 @@ impl HsvRange {
             }
         }
         Ok(())
+    }
+
+    /// The range picked around one clicked pixel's colour: its hue
+    /// `+-PICK_HUE_HALF_WIDTH` (wrapping through 0), saturation and value
+    /// from a margin below the pixel's up to 255, never down to grey or black.
+    pub fn around(rgb: [u8; 3]) -> Self {
+        let [h, s, v] = rgb_to_hsv(rgb);
+        let hues = u16::from(HUE_MAX) + 1;
+        let lower_h = (u16::from(h) + hues - u16::from(PICK_HUE_HALF_WIDTH)) % hues;
+        let upper_h = (u16::from(h) + u16::from(PICK_HUE_HALF_WIDTH)) % hues;
+        Self {
+            lower: [
+                lower_h as u8,
+                s.saturating_sub(PICK_SATURATION_BELOW)
+                    .max(PICK_MIN_SATURATION),
+                v.saturating_sub(PICK_VALUE_BELOW).max(PICK_MIN_VALUE),
+            ],
+            upper: [upper_h as u8, 255, 255],
+        }
     }
 
     /// `true` when the HSV triple lies in the box.
@@ -322,6 +353,29 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn a_picked_range_contains_its_colour_and_wraps_for_red() {
+        for rgb in [
+            [20, 60, 200],
+            [200, 30, 40],
+            [128, 128, 128],
+            [5, 5, 5],
+            [255, 255, 255],
+        ] {
+            let r = HsvRange::around(rgb);
+            assert!(r.validate().is_ok(), "{rgb:?}");
+            let hsv = rgb_to_hsv(rgb);
+            let passes = hsv[1] >= PICK_MIN_SATURATION && hsv[2] >= PICK_MIN_VALUE;
+            assert_eq!(r.contains(hsv), passes, "{rgb:?} {hsv:?} {r:?}");
+        }
+        // Pure red has hue 0: the range wraps from 168 to 12.
+        let r = HsvRange::around([255, 0, 0]);
+        assert_eq!((r.lower[0], r.upper[0]), (168, 12));
+        // Blue (S 229, V 200): saturation and value reach 70 and 90 below.
+        assert_eq!(rgb_to_hsv([20, 60, 200])[1..], [229, 200]);
+        assert_eq!(HsvRange::around([20, 60, 200]).lower[1..], [159, 110]);
     }
 
     #[test]

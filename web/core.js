@@ -1,0 +1,9 @@
+// The core's rules the page needs on its own thread (projection, HSV,
+// statistics, folder roots, checking settings), called through the same
+// WebAssembly module the worker tracks with: the JS keeps none of them.
+import init, {
+  projectPoints, rgbToHsv, hsvRangeAround, errorStats, commonRoot, checkDlo, parseParams,
+} from './pkg/upetrack_wasm.js';
+
+export const ready = init();
+export { projectPoints, rgbToHsv, hsvRangeAround, errorStats, commonRoot, checkDlo, parseParams };

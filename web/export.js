@@ -1,0 +1,25 @@
+// The result JSON of the contract (docs/sequence-format.md) for what the
+// page tracked, and its download.
+import { state } from './state.js';
+
+export function resultJson() {
+  return {
+    algorithm: state.params.algorithm,
+    params: state.params,
+    frames: state.results.slice(0, state.tracked + 1).map((r, k) => {
+      const f = { frame: k, nodes: [], visible: r.visible.map((v) => v === 1), track_ms: r.trackMs, total_ms: r.totalMs };
+      for (let j = 0; j < r.nodes.length; j += 3) f.nodes.push([r.nodes[j], r.nodes[j + 1], r.nodes[j + 2]]);
+      if (r.status === 'lost') { f.lost = true; f.reason = r.reason; }
+      return f;
+    }),
+  };
+}
+
+export function download(name, object) {
+  const blob = new Blob([JSON.stringify(object)], { type: 'application/json' });
+  const a = document.createElement('a');
+  a.href = URL.createObjectURL(blob);
+  a.download = name;
+  a.click();
+  setTimeout(() => URL.revokeObjectURL(a.href), 1000);
+}

@@ -1,0 +1,145 @@
+// The side panels and the mouse on the image: the algorithm choice, the
+// parameters, the HSV range (typed or picked by clicking the rope) and the
+// drawn occlusion rectangles. Every value is checked by the core before use.
+import { state, $, guarded } from './state.js';
+import { call } from './worker-client.js';
+import { Request } from './protocol.js';
+import { canvas, draw, drawDragged } from './draw.js';
+import { goTo, retrackFromHere, updatePlayButton } from './playback.js';
+import { checkDlo, hsvRangeAround, parseParams } from './core.js';
+
+const PARAM_FIELDS = ['node_count', 'displacement_decay', 'curvature_retention', 'bending_resistance',
+  'displacement_weight', 'end_displacement_weight', 'visibility_radius', 'visibility_min_points'];
+const MM_FIELDS = new Set(['visibility_radius']);
+
+export function setParamInputs(p) {
+  for (const f of PARAM_FIELDS) $(`p-${f}`).value = MM_FIELDS.has(f) ? Math.round(p[f] * 1e4) / 10 : p[f];
+}
+
+function paramsFromInputs() {
+  const next = { ...state.params };
+  for (const f of PARAM_FIELDS) {
+    const v = Number($(`p-${f}`).value);
+    next[f] = MM_FIELDS.has(f) ? v / 1000 : v;
+  }
+  return next;
+}
+
+export function setHsvInputs(h) {
+  ['h', 's', 'v'].forEach((c, k) => { $(`${c}-lo`).value = h.lower[k]; $(`${c}-hi`).value = h.upper[k]; });
+}
+
+// The typed range, checked as dlo.json's `segmentation` would be.
+function hsvFromInputs() {
+  const [lower, upper] = ['lo', 'hi'].map((end) => ['h', 's', 'v'].map((c) => Number($(`${c}-${end}`).value)));
+  return checkDlo(JSON.stringify({ segmentation: { hsv_lower: lower, hsv_upper: upper } })).hsv;
+}
+
+async function applyHsv(hsv) {
+  await call(Request.hsv(hsv));
+  state.hsv = hsv;
+  await retrackFromHere();
+}
+
+export function renderRects() {
+  const box = $('rects');
+  box.textContent = '';
+  state.userRects.forEach((r, k) => {
+    const b = document.createElement('button');
+    b.textContent = `× [${r.join(', ')}]`;
+    b.title = 'Remove this occlusion';
+    b.onclick = () => { state.userRects.splice(k, 1); renderRects(); retrackFromHere(); };
+    box.append(b);
+  });
+}
+
+// Adds a drawn rectangle ([x, y, w, h], whole pixels) for every frame.
+export function addRect(r) {
+  const last = state.seq ? state.seq.info.color_files.length - 1 : 0;
+  checkDlo(JSON.stringify({ occlusions: [{ frames: [0, last], rect: r }] }));
+  state.userRects.push(r);
+  renderRects();
+  return retrackFromHere();
+}
+
+function imagePoint(e) {
+  const b = canvas.getBoundingClientRect();
+  return [Math.round(((e.clientX - b.left) / b.width) * canvas.width), Math.round(((e.clientY - b.top) / b.height) * canvas.height)];
+}
+
+function setMode(mode) {
+  state.mode = state.mode === mode ? 'none' : mode;
+  $('draw-mode').classList.toggle('active', state.mode === 'draw');
+  $('pick-mode').classList.toggle('active', state.mode === 'pick');
+  canvas.classList.toggle('drawing', state.mode === 'draw');
+  canvas.classList.toggle('picking', state.mode === 'pick');
+}
+
+// The colour range around the pixel at (x, y) of the shown frame.
+export function pickAt(x, y) {
+  const f = state.frame;
+  const k = 4 * (y * f.width + x);
+  const hsv = hsvRangeAround(f.rgba[k], f.rgba[k + 1], f.rgba[k + 2]);
+  setHsvInputs(hsv);
+  return applyHsv(hsv);
+}
+
+export function bindPanels() {
+  $('params').onchange = guarded(async () => {
+    try {
+      const checked = parseParams(JSON.stringify(paramsFromInputs()));
+      const r = await call(Request.params(checked));
+      state.params = r.params;
+      await retrackFromHere();
+    } catch (err) {
+      setParamInputs(state.params);
+      throw err;
+    }
+  });
+  // A new algorithm (or compared one) tracks the sequence again from the start.
+  $('algorithms').onchange = guarded(async () => {
+    state.params = { ...state.params, algorithm: $('algorithm').value };
+    state.compare = $('compare').value;
+    if (!state.seq) return;
+    state.playing = false;
+    updatePlayButton();
+    state.generation++;
+    state.epoch++;
+    const seq = state.seq;
+    state.busy = state.busy.then(async () => {
+      await call(Request.open(seq.info.camera, state.params, state.hsv, state.compare));
+      state.results = [];
+      state.tracked = -1;
+      state.lookahead = null;
+    });
+    await state.busy;
+    await goTo(state.index);
+  });
+  $('hsv').onchange = guarded(async () => {
+    try {
+      await applyHsv(hsvFromInputs());
+    } catch (err) {
+      if (state.hsv) setHsvInputs(state.hsv);
+      throw err;
+    }
+  });
+  $('draw-mode').onclick = () => setMode('draw');
+  $('pick-mode').onclick = () => setMode('pick');
+  $('clear-rects').onclick = () => { state.userRects = []; renderRects(); retrackFromHere(); };
+  let dragStart = null;
+  canvas.onmousedown = (e) => { if (state.mode === 'draw') dragStart = imagePoint(e); };
+  canvas.onmousemove = (e) => { if (dragStart) drawDragged(dragStart, imagePoint(e)); };
+  canvas.onmouseup = guarded(async (e) => {
+    if (state.mode === 'pick' && state.frame) {
+      const [x, y] = imagePoint(e);
+      setMode('pick');
+      await pickAt(x, y);
+      return;
+    }
+    if (!dragStart) return;
+    const [x, y] = imagePoint(e);
+    const r = [Math.min(x, dragStart[0]), Math.min(y, dragStart[1]), Math.abs(x - dragStart[0]), Math.abs(y - dragStart[1])];
+    dragStart = null;
+    if (r[2] > 2 && r[3] > 2) await addRect(r); else draw();
+  });
+}

@@ -1,0 +1,115 @@
+// Moving through a sequence: frames are tracked in order, each result keeps
+// the tracker's snapshot, and while playing the next frame is requested
+// before the current one is drawn (the worker works while the page draws).
+import { state, $, showError, progress } from './state.js';
+import { call } from './worker-client.js';
+import { Request } from './protocol.js';
+import { requestFrame } from './sequence.js';
+import { draw } from './draw.js';
+import { updateLabels, drawPlot } from './plot.js';
+import { projectPoints } from './core.js';
+
+// Playback speeds offered (the page's select), times the sequence's fps.
+export const SPEEDS = [0.25, 0.5, 1, 2, 4];
+const FPS_WINDOW = 30;
+
+export function updatePlayButton() { $('play').textContent = state.playing ? 'Pause' : 'Play'; }
+
+// Draws the shown frame with its labels and the plot.
+export function render() {
+  draw();
+  state.shownAt.push(performance.now());
+  if (state.shownAt.length > FPS_WINDOW) state.shownAt.shift();
+  updateLabels();
+  drawPlot();
+}
+
+// Shows frame i, tracking every frame up to it first (tracking is sequential).
+export function goTo(i) {
+  state.busy = state.busy.then(() => goToNow(i)).catch((err) => {
+    state.playing = false;
+    updatePlayButton();
+    showError(err.message || String(err));
+  });
+  return state.busy;
+}
+
+function keep(r) {
+  return {
+    nodes: r.nodes, nodesPx: r.nodesPx, visible: r.visible, status: r.status, reason: r.reason,
+    trackMs: r.trackMs, totalMs: r.totalMs, decodeMs: r.decodeMs, error: r.error, snapshot: r.snapshot,
+    second: r.second || null,
+  };
+}
+
+async function goToNow(i) {
+  if (!state.seq) return;
+  const n = state.seq.info.color_files.length;
+  i = Math.max(0, Math.min(n - 1, i));
+  const generation = state.generation;
+  let r = null;
+  if (i <= state.tracked) {
+    r = await requestFrame(i, false);
+  } else {
+    const from = state.tracked + 1;
+    for (let k = from; k <= i; k++) {
+      const look = state.lookahead;
+      state.lookahead = null;
+      const usable = look && look.index === k && look.epoch === state.epoch && look.generation === generation;
+      r = await (usable ? look.promise : requestFrame(k, true));
+      if (generation !== state.generation) return;
+      state.results[k] = keep(r);
+      state.tracked = k;
+      if (state.playing && k === i && k + 1 < n) {
+        const promise = requestFrame(k + 1, true);
+        promise.catch(() => {});
+        state.lookahead = { index: k + 1, epoch: state.epoch, generation, promise };
+      }
+      if (k < i && (k - from) % 10 === 9) progress(k - from, i - from);
+    }
+    progress(null);
+  }
+  if (generation !== state.generation) return;
+  state.index = i;
+  state.frame = {
+    width: r.width, height: r.height, rgba: new Uint8ClampedArray(r.rgba),
+    mask: r.mask ? new Uint8Array(r.mask) : null, depth: r.depth ? new Uint8ClampedArray(r.depth) : null, decodeMs: r.decodeMs,
+  };
+  const gt = state.seq.info.groundtruth[i];
+  state.truthPx = gt ? projectPoints(state.seq.info.camera, new Float64Array(gt)) : null;
+  render();
+}
+
+export async function play() {
+  if (!state.seq) return;
+  state.playing = !state.playing;
+  updatePlayButton();
+  while (state.playing) {
+    const n = state.seq.info.color_files.length;
+    if (state.index >= n - 1) { state.playing = false; break; }
+    const t0 = performance.now();
+    await goTo(state.index + 1);
+    const period = 1000 / (state.seq.info.fps * Number($('speed').value));
+    const wait = period - (performance.now() - t0);
+    if (wait > 0) await new Promise((r) => setTimeout(r, wait));
+  }
+  updatePlayButton();
+}
+
+// When settings change, the shown frame and those after it are tracked
+// again: the worker's tracker goes back to its state before the shown frame.
+export function invalidateAfterCurrent() {
+  state.epoch++;
+  const kept = Math.min(state.tracked, state.index - 1);
+  if (kept === state.tracked && !state.lookahead) return;
+  state.results.length = kept + 1;
+  state.tracked = kept;
+  const snapshot = kept >= 0 ? state.results[kept].snapshot : null;
+  state.busy = state.busy.then(() => call(Request.restore(snapshot)));
+}
+
+// Re-tracks from the shown frame after a settings change, and shows it.
+export function retrackFromHere() {
+  invalidateAfterCurrent();
+  return goTo(state.index);
+}

@@ -1,0 +1,65 @@
+// The frame-error plot and the statistics lines under the image. Means and
+// medians come from the core (errorStats), as in `upetrack eval`.
+import { state, $, ALGORITHM_NAMES } from './state.js';
+import { MAIN_COLOURS, COMPARED_COLOURS } from './draw.js';
+import { errorStats } from './core.js';
+
+const stats = (xs) => errorStats(new Float64Array(xs));
+const fixed = (x, d) => (Number.isFinite(x) ? x.toFixed(d) : '-');
+
+export function updateLabels() {
+  const n = state.seq.info.color_files.length;
+  $('timeline').value = String(state.index);
+  $('frame-label').textContent = `${state.index + 1} / ${n}`;
+  const r = state.results[state.index];
+  const tracked = state.results.slice(0, state.tracked + 1).filter(Boolean);
+  const ts = state.shownAt;
+  const fps = ts.length > 1 ? (1000 * (ts.length - 1)) / (ts[ts.length - 1] - ts[0]) : NaN;
+  const lines = [
+    `sequence ${state.seq.name}   frame ${state.index}   status ${r ? r.status : '-'}${r && r.reason ? ` (${r.reason})` : ''}`,
+    r ? `tracking ${r.trackMs.toFixed(2)} ms   segmentation+cloud+tracking ${r.totalMs.toFixed(2)} ms   decoding ${r.decodeMs.toFixed(1)} ms   median tracking ${fixed(stats(tracked.map((x) => x.trackMs)).median, 2)} ms` : '',
+    `display ${fixed(fps, 1)} frames/s   visible nodes ${r ? r.visible.filter((v) => v).length : '-'} of ${r ? r.visible.length : '-'}`,
+    r && r.error.length ? `frame error ${r.error[0].toFixed(2)} mm, ${r.error[1].toFixed(2)} px (${ALGORITHM_NAMES[state.params.algorithm]}, red)` : 'no ground truth for this frame',
+  ];
+  const c = r && r.second;
+  if (c) {
+    const err = c.error.length ? `frame error ${c.error[0].toFixed(2)} mm, ${c.error[1].toFixed(2)} px` : 'no ground truth';
+    lines.push(`compared: ${ALGORITHM_NAMES[state.compare]} (cyan): ${err}   tracking ${c.trackMs.toFixed(2)} ms   status ${c.status}   median tracking ${fixed(stats(tracked.filter((x) => x.second).map((x) => x.second.trackMs)).median, 2)} ms`);
+  }
+  $('stats').textContent = lines.join('\n');
+}
+
+export function drawPlot() {
+  const c = $('plot');
+  const g = c.getContext('2d');
+  g.clearRect(0, 0, c.width, c.height);
+  const n = state.seq.info.color_files.length;
+  const series = [{ name: state.params.algorithm, colours: MAIN_COLOURS, of: (r) => r }];
+  if (state.compare) series.push({ name: state.compare, colours: COMPARED_COLOURS, of: (r) => r.second });
+  for (const s of series) {
+    s.errs = state.results.map((r, k) => {
+      const x = r && s.of(r);
+      return x && x.error.length ? [k, x.error[0], x.error[1]] : null;
+    }).filter(Boolean);
+  }
+  const all = series.flatMap((s) => s.errs);
+  if (!all.length) { $('plot-label').textContent = 'Frame error: the sequence has no ground truth.'; return; }
+  const ymax = Math.max(10, ...all.map((e) => e[1])) * 1.1;
+  const x = (k) => 30 + (k / Math.max(1, n - 1)) * (c.width - 40);
+  const y = (v) => c.height - 15 - (v / ymax) * (c.height - 25);
+  g.strokeStyle = '#ccc'; g.fillStyle = '#666'; g.font = '10px sans-serif';
+  for (const t of [0, ymax / 2, ymax]) { g.beginPath(); g.moveTo(30, y(t)); g.lineTo(c.width - 10, y(t)); g.stroke(); g.fillText(t.toFixed(0), 2, y(t) + 3); }
+  const labels = [];
+  for (const s of series) {
+    if (!s.errs.length) continue;
+    g.strokeStyle = s.colours.curve; g.lineWidth = 1.5; g.beginPath();
+    s.errs.forEach(([k, v], j) => (j ? g.lineTo(x(k), y(v)) : g.moveTo(x(k), y(v))));
+    g.stroke();
+    const mm = stats(s.errs.map((e) => e[1])).mean;
+    const px = stats(s.errs.map((e) => e[2])).mean;
+    g.setLineDash([4, 3]); g.beginPath(); g.moveTo(30, y(mm)); g.lineTo(c.width - 10, y(mm)); g.stroke(); g.setLineDash([]);
+    labels.push(`${ALGORITHM_NAMES[s.name]} mean ${mm.toFixed(2)} mm, ${px.toFixed(2)} px over ${s.errs.length} frames`);
+  }
+  g.strokeStyle = '#000'; g.beginPath(); g.moveTo(x(state.index), 5); g.lineTo(x(state.index), c.height - 15); g.stroke();
+  $('plot-label').textContent = `Frame error (mm) over time (dashed: means). ${labels.join('; ')}.`;
+}

@@ -1,0 +1,33 @@
+// The page <-> worker message protocol, written once and imported by both
+// sides. The page sends one of these requests with an `id`; the worker
+// answers { id, ok: true, ...reply } or { id, ok: false, error }.
+//
+// request    fields                                          reply
+// defaults   -                                               { params }
+// info       name, json {file: bytes}, images [paths]        { info }
+// open       camera, params, hsv, compare                    {}
+// params     params                                          { params } (validated, every field)
+// hsv        hsv {lower, upper}                              {}
+// restore    snapshot ({main, second} or null)               {}
+// zip        bytes (transferred), name                       { names }
+// zipRead    path                                            { bytes }
+// frame      index, track, color, depth, colorName,          { index, width, height, decodeMs, rgba,
+//            depthName, fromZip, depthScale, occlusions,       [nodes, nodesPx, visible, status, reason,
+//            groundtruth, wantMask, wantDepth                   trackMs, totalMs, error, second, snapshot,
+//                                                               mask], [depth (RGBA ramp)] }
+
+export const Request = {
+  defaults: () => ({ type: 'defaults' }),
+  info: (name, json, images) => ({ type: 'info', name, json, images }),
+  open: (camera, params, hsv, compare) => ({ type: 'open', camera, params, hsv, compare }),
+  params: (params) => ({ type: 'params', params }),
+  hsv: (hsv) => ({ type: 'hsv', hsv }),
+  restore: (snapshot) => ({ type: 'restore', snapshot }),
+  zip: (bytes, name) => ({ type: 'zip', bytes, name }),
+  zipRead: (path) => ({ type: 'zipRead', path }),
+  frame: (f) => ({
+    type: 'frame', index: f.index, track: f.track, color: f.color, depth: f.depth,
+    colorName: f.colorName, depthName: f.depthName, fromZip: f.fromZip, depthScale: f.depthScale,
+    occlusions: f.occlusions, groundtruth: f.groundtruth, wantMask: f.wantMask, wantDepth: f.wantDepth,
+  }),
+};

@@ -1,0 +1,146 @@
+// Opening sequences (bundled samples, a folder, dropped files, a .zip) and
+// reading one frame's files, at most one frame ahead.
+import { state, progress, $ } from './state.js';
+import { call } from './worker-client.js';
+import { Request } from './protocol.js';
+import { commonRoot } from './core.js';
+
+// Set by app.js: what happens once a sequence is open (show frame 0).
+export const hooks = { opened: async () => {} };
+
+async function openSequence(name, paths, read, fromZip = false) {
+  const generation = ++state.generation;
+  state.playing = false;
+  const jsonNames = paths.filter((p) => !p.includes('/') && p.toLowerCase().endsWith('.json'));
+  const json = {};
+  let done = 0;
+  for (const n of jsonNames) {
+    json[n] = await read(n);
+    progress(++done, jsonNames.length + 1);
+  }
+  const images = paths.filter((p) => /^(color|rgb|image|depth)\/[^/]+$/i.test(p));
+  const { info } = await call(Request.info(name, json, images));
+  await call(Request.open(info.camera, state.params, info.hsv, state.compare));
+  if (generation !== state.generation) return;
+  state.seq = { name, info, read, fromZip };
+  state.hsv = info.hsv;
+  state.index = 0;
+  state.tracked = -1;
+  state.results = [];
+  state.userRects = [];
+  progress(null);
+  await hooks.opened();
+}
+
+export async function loadSample(name, index) {
+  const entry = index.samples.find((s) => s.name === name);
+  if (!entry) throw new Error(`no sample named ${name}`);
+  const base = new URL(`../samples/${encodeURIComponent(name)}/`, import.meta.url);
+  const read = async (p) => {
+    const r = await fetch(new URL(p, base));
+    if (!r.ok) throw new Error(`samples/${name}/${p}: HTTP ${r.status}`);
+    return r.arrayBuffer();
+  };
+  await openSequence(name, entry.files, read);
+}
+
+// Files from a folder picker or a drop ({ path, file }): the folders above
+// the sequence's layout are stripped (the core's rule).
+export async function openFiles(files, label) {
+  const zip = files.find((f) => f.path.toLowerCase().endsWith('.zip'));
+  if (zip && files.length === 1) return openZip(zip.file);
+  const paths = files.map((f) => f.path.split('/').filter(Boolean).join('/'));
+  const root = commonRoot(paths);
+  const cut = root ? root.length + 1 : 0;
+  const map = new Map();
+  paths.forEach((p, i) => map.set(p.slice(cut), files[i].file));
+  const name = root ? root.split('/').pop() : label;
+  const read = async (p) => {
+    const f = map.get(p);
+    if (!f) throw new Error(`${name}/${p}: missing`);
+    return f.arrayBuffer();
+  };
+  return openSequence(name, [...map.keys()], read);
+}
+
+function readWithProgress(file) {
+  return new Promise((resolve, reject) => {
+    const r = new FileReader();
+    r.onprogress = (e) => progress(e.loaded, e.total || 1);
+    r.onload = () => resolve(r.result);
+    r.onerror = () => reject(new Error(`${file.name}: ${r.error}`));
+    r.readAsArrayBuffer(file);
+  });
+}
+
+export async function openZip(file) {
+  const bytes = await readWithProgress(file);
+  progress(0);
+  const { names } = await call(Request.zip(bytes, file.name), [bytes]);
+  const read = async (p) => (await call(Request.zipRead(p))).bytes;
+  return openSequence(file.name, names, read, true);
+}
+
+// Every file under a dropped entry, with its path.
+export async function entryFiles(entry, prefix, out) {
+  if (entry.isFile) {
+    const file = await new Promise((res, rej) => entry.file(res, rej));
+    out.push({ path: prefix + entry.name, file });
+  } else if (entry.isDirectory) {
+    const reader = entry.createReader();
+    for (;;) {
+      const batch = await new Promise((res, rej) => reader.readEntries(res, rej));
+      if (!batch.length) break;
+      for (const e of batch) await entryFiles(e, `${prefix}${entry.name}/`, out);
+    }
+  }
+}
+
+// The occlusion rectangles of frame i: the sequence's and the drawn ones, flat.
+export function activeRects(i) {
+  const flat = [];
+  for (const o of state.seq.info.occlusions) {
+    if (i >= o.frames[0] && i <= o.frames[1]) flat.push(...o.rect);
+  }
+  for (const r of state.userRects) flat.push(...r);
+  return flat;
+}
+
+// File bytes of frame i, read ahead at most one frame.
+const ahead = new Map();
+function readBoth(seq, i) {
+  return Promise.all([seq.read(seq.info.color_files[i]), seq.read(seq.info.depth_files[i])]);
+}
+function prefetch(i) {
+  if (ahead.has(i)) return;
+  ahead.clear();
+  const seq = state.seq;
+  const p = readBoth(seq, i);
+  p.catch(() => {});
+  ahead.set(i, { seq, p });
+}
+function readPair(i) {
+  const hit = ahead.get(i);
+  ahead.delete(i);
+  return hit && hit.seq === state.seq ? hit.p : readBoth(state.seq, i);
+}
+
+// Decodes (and, with `track`, tracks) frame i in the worker.
+export async function requestFrame(i, track) {
+  const seq = state.seq;
+  const info = seq.info;
+  let color = null;
+  let depth = null;
+  const transfer = [];
+  if (!seq.fromZip) {
+    [color, depth] = await readPair(i);
+    transfer.push(color, depth);
+    // Read the next frame's files while this one is decoded and tracked.
+    if (i + 1 < info.color_files.length) prefetch(i + 1);
+  }
+  return call(Request.frame({
+    index: i, track, color, depth, colorName: info.color_files[i], depthName: info.depth_files[i],
+    fromZip: seq.fromZip, depthScale: info.depth_scale, occlusions: activeRects(i),
+    groundtruth: info.groundtruth[i], wantMask: $('show-mask').checked, wantDepth: $('show-depth').checked,
+  }), transfer);
+}

@@ -1,0 +1,48 @@
+// The page's state and its small shared helpers: element lookup, the
+// message banner, the progress bar, and error guarding of handlers.
+
+export const $ = (id) => document.getElementById(id);
+
+export const ALGORITHM_NAMES = { upetrack: 'UPETrack', cpd: 'CPD', trackdlo: 'TrackDLO' };
+
+export const state = {
+  seq: null,          // { name, info, read(path), fromZip }
+  index: 0,           // frame shown
+  tracked: -1,        // last frame tracked (frames are tracked in order)
+  results: [],        // per frame: { nodes, nodesPx, visible, status, reason, trackMs, totalMs, error, snapshot, second }
+  params: null,       // parameters in force (all fields, with the algorithm)
+  compare: '',        // algorithm tracked alongside for comparison ('' for none)
+  hsv: null,          // { lower, upper } in force
+  userRects: [],      // [x, y, w, h] drawn on the image
+  playing: false,
+  busy: Promise.resolve(),
+  frame: null,        // last decoded frame { width, height, rgba, mask, depth, decodeMs }
+  truthPx: null,      // ground truth of the shown frame in pixels
+  mode: 'none',       // 'draw' | 'pick'
+  shownAt: [],        // display timestamps, for the frame rate
+  generation: 0,      // bumped when a new sequence opens
+  epoch: 0,           // bumped when settings change; a look-ahead from an older epoch is dropped
+  lookahead: null,    // { index, epoch, generation, promise } of the next frame, while playing
+  errors: [],         // every message shown in the banner, for scripts and tests
+};
+
+export function showError(text) {
+  $('message-text').textContent = text;
+  $('message').hidden = false;
+  state.errors.push(text);
+  console.error(text);
+}
+
+export function progress(value, max) {
+  const p = $('progress');
+  if (value === null) { p.hidden = true; return; }
+  p.hidden = false;
+  if (max) { p.max = max; p.value = value; } else p.removeAttribute('value');
+}
+
+// A handler whose failures are shown in the banner instead of thrown.
+export function guarded(fn) {
+  return async (...args) => {
+    try { return await fn(...args); } catch (err) { progress(null); showError(err.message || String(err)); return undefined; }
+  };
+}
