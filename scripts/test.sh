@@ -17,6 +17,8 @@ python3 scripts/module_cycles.py
 if python3 scripts/module_cycles.py tests/data/module-cycle >/dev/null; then
   echo "module_cycles.py missed the fixture's cycle"; exit 1
 fi
+echo "== file sizes (scripts/file_sizes.py)"
+python3 scripts/file_sizes.py
 echo "== clippy -D warnings"
 cargo clippy --workspace --all-targets -- -D warnings
 echo "== rustdoc -D warnings"
