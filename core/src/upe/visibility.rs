@@ -78,28 +78,40 @@ mod tests {
 
     #[test]
     fn relative_test_hides_nodes_with_a_partial_neighbourhood() {
-        // Three nodes on a line of points spaced 1 mm; the last line stops at
-        // the third node, which sees half as many points as the others.
-        let cloud: Vec<Vec3> = (0..=60)
+        // The defaults: r_vis 20 mm, V_lim 3, relative fraction 0.5.
+        let p = crate::params::Params::default();
+        let (r, v, f) = (
+            p.visibility_radius,
+            p.visibility_min_points as usize,
+            p.visibility_min_fraction,
+        );
+        assert_eq!((r, v, f), (0.020, 3, 0.5));
+        // Points every 1 mm up to x = 0.100 m (an occluder beyond), nodes on
+        // the line: q = 40 for the nodes in full view, 24 for the node
+        // 4 mm inside the edge, 5 for the node 15.5 mm past it.
+        let cloud: Vec<Vec3> = (0..=100)
             .map(|i| Vec3::new(i as f64 * 0.001, 0.0, 0.0))
             .collect();
-        let nodes = vec![
-            Vec3::new(0.015, 0.0, 0.0),
-            Vec3::new(0.035, 0.0, 0.0),
-            Vec3::new(0.060, 0.0, 0.0),
-        ];
-        // q = 19, 19, 10 within 10 mm.
+        let nodes: Vec<Vec3> = [0.026, 0.061, 0.096, 0.1155, 0.150]
+            .iter()
+            .map(|&x| Vec3::new(x, 0.0, 0.0))
+            .collect();
+        let q: Vec<usize> = nodes.iter().map(|y| neighbour_count(y, &cloud, r)).collect();
+        assert_eq!(q, vec![40, 40, 24, 5, 0]);
+        // The paper's rule keeps the node past the edge visible (5 >= V_lim) ...
         assert_eq!(
-            visible_nodes_relative(&nodes, &cloud, 0.01, 3, 0.0),
-            vec![true, true, true]
+            visible_nodes_relative(&nodes, &cloud, r, v, 0.0),
+            vec![true, true, true, true, false]
+        );
+        // ... the relative test at its default hides it (5 < 0.5 x 40) and
+        // keeps the one still mostly in view (24 >= 20).
+        assert_eq!(
+            visible_nodes_relative(&nodes, &cloud, r, v, f),
+            vec![true, true, true, false, false]
         );
         assert_eq!(
-            visible_nodes_relative(&nodes, &cloud, 0.01, 3, 0.75),
-            vec![true, true, false]
-        );
-        assert_eq!(
-            visible_nodes_relative(&nodes, &[], 0.01, 3, 0.75),
-            vec![false, false, false]
+            visible_nodes_relative(&nodes, &[], r, v, f),
+            vec![false; 5]
         );
     }
 }
