@@ -278,15 +278,38 @@ fn zip_problems_are_refused() {
 
 #[test]
 fn dlo_json_problems_are_named_and_outside_rectangles_are_clipped() {
-    let cases: [(&str, &str, &[&str]); 5] = [
+    let cases: [(&str, &str, &[&str]); 9] = [
+        (
+            "dlo-depth-scale",
+            r#"{"depth_scale": -0.001}"#,
+            &[
+                "dlo.json",
+                "depth_scale -0.001 must be finite and in (0, 1)",
+            ],
+        ),
+        (
+            "dlo-fps",
+            r#"{"fps": 0}"#,
+            &["dlo.json", "fps 0 must be in (0, 10000]"],
+        ),
+        (
+            "dlo-gt-absolute",
+            r#"{"groundtruth": "/etc/hostname"}"#,
+            &["dlo.json", "inside the sequence folder"],
+        ),
+        (
+            "dlo-gt-parent",
+            r#"{"groundtruth": "../groundtruth.json"}"#,
+            &["dlo.json", "inside the sequence folder"],
+        ),
+        (
+            "dlo-hsv-300",
+            r#"{"segmentation": {"hsv_lower": [90, 90, 30], "hsv_upper": [130, 300, 255]}}"#,
+            &["dlo.json", "invalid value: integer `300`, expected u8"],
+        ),
         (
             "dlo-types",
             r#"{"segmentation": {"hsv_lower": "blue", "hsv_upper": [130, 255, 255]}}"#,
-            &["dlo.json", "invalid JSON"],
-        ),
-        (
-            "dlo-nan",
-            r#"{"depth_scale": NaN}"#,
             &["dlo.json", "invalid JSON"],
         ),
         (
@@ -320,16 +343,42 @@ fn dlo_json_problems_are_named_and_outside_rectangles_are_clipped() {
     assert!(ok, "{err}");
 }
 
+/// Regression: a folder of symbolic links to frames was read as a folder
+/// without frames ("no .jpg or .png frames").
+#[test]
+fn symlinked_frames_are_frames() {
+    let s = copy("symlinks");
+    for dir in ["color", "depth"] {
+        let real = s.join(format!("{dir}-real"));
+        std::fs::rename(s.join(dir), &real).expect("rename");
+        std::fs::create_dir(s.join(dir)).expect("mkdir");
+        for e in std::fs::read_dir(&real).expect("read_dir") {
+            let e = e.expect("entry");
+            std::os::unix::fs::symlink(e.path(), s.join(dir).join(e.file_name())).expect("symlink");
+        }
+    }
+    let (ok, err) = track(&s, &[]);
+    assert!(ok, "{err}");
+}
+
 #[test]
 fn bad_parameters_are_named() {
     let s = copy("params");
-    let cases: [(&str, &[&str]); 6] = [
+    let cases: [(&str, &[&str]); 8] = [
         (r#"{"node_count": 3}"#, &["node_count"]),
         (r#"{"node_count": 5000000}"#, &["node_count"]),
         (r#"{"visibility_radius": -0.02}"#, &["visibility_radius"]),
         (r#"{"displacement_decay": 1e999}"#, &["params.json"]),
         (r#"{"bending_resistance": "stiff"}"#, &["params.json"]),
         (r#"{"no_such_parameter": 1}"#, &["no_such_parameter"]),
+        (
+            r#"{"reinit_visible_fraction": -5}"#,
+            &["reinit_visible_fraction", "in [0, 1]"],
+        ),
+        (
+            r#"{"reinit_visible_fraction": 1e300}"#,
+            &["reinit_visible_fraction"],
+        ),
     ];
     for (content, fragments) in cases {
         let p = s.join("params.json");

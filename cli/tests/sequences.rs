@@ -128,38 +128,57 @@ fn track_scenario(kind: ScenarioKind, frames: usize, params: Params) -> (Vec<f64
     (clear, occluded)
 }
 
+/// Mean of a series that must have frames and finite errors (an empty
+/// series or a NaN would otherwise pass any bound).
 fn mean(v: &[f64]) -> f64 {
-    v.iter().sum::<f64>() / v.len().max(1) as f64
+    assert!(!v.is_empty(), "no frames in the series");
+    assert!(v.iter().all(|e| e.is_finite()), "non-finite error in {v:?}");
+    v.iter().sum::<f64>() / v.len() as f64
 }
 
+/// Largest of a series, under the same conditions as [`mean`].
 fn max(v: &[f64]) -> f64 {
-    v.iter().copied().fold(0.0, f64::max)
+    assert!(!v.is_empty(), "no frames in the series");
+    assert!(v.iter().all(|e| e.is_finite()), "non-finite error in {v:?}");
+    v.iter().copied().fold(f64::NEG_INFINITY, f64::max)
 }
 
 #[test]
 fn tracker_follows_a_fast_pull_and_a_dragged_rope_with_a_hidden_tip() {
-    for kind in [ScenarioKind::FastPull, ScenarioKind::TipDrag] {
+    // (scenario, bound on the clear mean, bound on the occluded mean), mm:
+    // 1.2-1.5x the figures docs/testing.md reports for these 60 frames
+    // (fast-pull 3.43, no occluder; tip-drag 1.93 clear, 2.28 hidden).
+    for (kind, clear_bound, occluded_bound) in [
+        (ScenarioKind::FastPull, 4.2, None),
+        (ScenarioKind::TipDrag, 2.9, Some(3.3)),
+    ] {
         let (clear, occluded) = track_scenario(kind, 60, Params::default());
+        assert_eq!(!occluded.is_empty(), occluded_bound.is_some(), "{kind:?}");
+        let all: Vec<f64> = clear.iter().chain(&occluded).copied().collect();
         eprintln!(
-            "{kind:?}: clear mean {:.2} max {:.2} mm; occluded mean {:.2} max {:.2} mm",
+            "{kind:?}: clear mean {:.2} mm, occluded mean {}, all frames max {:.2} mm",
             mean(&clear),
-            max(&clear),
-            mean(&occluded),
-            max(&occluded)
+            if occluded.is_empty() {
+                "-".to_string()
+            } else {
+                format!("{:.2}", mean(&occluded))
+            },
+            max(&all)
         );
-        // Without occlusion the tracker sits on the rope (its end nodes stop
-        // about a half spacing short of the tips, so a few mm remain).
         assert!(
-            mean(&clear) < 4.0,
-            "{kind:?}: mean unoccluded error {:.2} mm",
+            mean(&clear) < clear_bound,
+            "{kind:?}: clear mean {:.2} mm",
             mean(&clear)
         );
-        // Under occlusion: bounded, no frame above 20 mm.
-        assert!(
-            max(&occluded) < 20.0,
-            "{kind:?}: max occluded error {:.2} mm",
-            max(&occluded)
-        );
+        if let Some(bound) = occluded_bound {
+            assert!(
+                mean(&occluded) < bound,
+                "{kind:?}: occluded mean {:.2} mm",
+                mean(&occluded)
+            );
+        }
+        // The tables' failure threshold: no frame above 20 mm.
+        assert!(max(&all) < 20.0, "{kind:?}: max error {:.2} mm", max(&all));
     }
 }
 
@@ -206,7 +225,8 @@ fn track_command_writes_every_frame_of_the_contract() {
         &seq.camera,
         seq.first_occluded_frame(),
     );
-    assert!(s.mm.mean < 10.0 && s.px.mean < 10.0, "{s:?}");
+    // docs/testing.md: 2.89 mm, 1.80 px on these 8 frames (seed 3).
+    assert!(s.mm.mean < 3.6 && s.px.mean < 2.3, "{s:?}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -293,7 +313,11 @@ fn tracker_never_panics_on_degenerate_frames() {
     let k = 240 * 640 + 320;
     one[3 * k..3 * k + 3].copy_from_slice(&good.rgb[3 * k..3 * k + 3]);
     let f1 = Frame::new(640, 480, &one, &good.depth, 0.001).expect("frame");
-    let _ = tracker.process(&f1, &[]).expect("ok");
+    // Almost nothing in view: no node keeps its neighbours, the rope cannot
+    // be found again, the frame is lost and the nodes are held.
+    let out = tracker.process(&f1, &[]).expect("ok");
+    assert!(out.is_lost(), "{:?}", out.status);
+    assert_eq!(out.nodes, before);
     // Then the good frame again: tracking resumes near the rope.
     let out = tracker.process(&f, &[]).expect("ok");
     assert!(!out.is_lost(), "{:?}", out.status);
@@ -465,4 +489,61 @@ fn a_hidden_tip_moves_with_the_pulled_rope_instead_of_straightening() {
     eprintln!("sweep-30: occluded mean {ours:.2} mm (ends: displacement alone), {papers:.2} mm (paper's alpha)");
     assert!(ours < 10.0, "occluded mean {ours:.2} mm");
     assert!(ours < 0.7 * papers, "{ours:.2} vs {papers:.2}");
+}
+
+/// The image of `f` moved right by `dx` pixels (the rope jumped).
+fn shifted(rgb: &[u8], depth: &[u16], dx: usize) -> (Vec<u8>, Vec<u16>) {
+    let (w, h) = (640, 480);
+    let mut rgb2 = vec![200u8; w * h * 3];
+    let mut depth2 = vec![0u16; w * h];
+    for y in 0..h {
+        for x in dx..w {
+            let (from, to) = (y * w + x - dx, y * w + x);
+            rgb2[3 * to..3 * to + 3].copy_from_slice(&rgb[3 * from..3 * from + 3]);
+            depth2[to] = depth[from];
+        }
+    }
+    (rgb2, depth2)
+}
+
+/// `reinit_visible_fraction`: when fewer than that fraction of the nodes
+/// keep points nearby but a full-length rope is in view, the tracker starts
+/// again from it; 0 turns the rule off and the step tracks on.
+#[test]
+fn a_jumped_rope_re_initialises_when_few_nodes_stay_visible() {
+    let mut s = Scenario::new(ScenarioKind::StaticS, 2, 1, RenderSettings::default());
+    let f = s.next_frame().expect("frame");
+    let (rgb2, depth2) = shifted(&f.rgb, &f.depth, 30);
+    let a = Frame::new(640, 480, &f.rgb, &f.depth, 0.001).expect("frame");
+    let b = Frame::new(640, 480, &rgb2, &depth2, 0.001).expect("frame");
+    let mut statuses = Vec::new();
+    for fraction in [0.5, 0.0] {
+        let p = Params {
+            reinit_visible_fraction: fraction,
+            ..Params::default()
+        };
+        let mut t = Tracker::new(p, s.camera(), s.hsv()).expect("tracker");
+        assert!(!t.process(&a, &[]).expect("a").is_lost());
+        let obs = t.observe(&b, &[]).expect("observe");
+        let visible = upetrack::upe::visibility::visible_nodes_relative(
+            t.nodes(),
+            &obs.cloud,
+            p.visibility_radius,
+            p.visibility_min_points as usize,
+            p.visibility_min_fraction,
+        );
+        let seen = visible.iter().filter(|&&v| v).count();
+        let out = t.update(&b, &obs);
+        eprintln!(
+            "fraction {fraction}: {seen} of 24 visible after the jump, {:?}",
+            out.status
+        );
+        assert!(
+            seen > 0 && seen < 12,
+            "{seen} visible: not the case under test"
+        );
+        statuses.push(out.status);
+    }
+    assert_eq!(statuses[0], upetrack::tracker::FrameStatus::Initialised);
+    assert_eq!(statuses[1], upetrack::tracker::FrameStatus::Tracked);
 }

@@ -12,7 +12,12 @@ fn the_readme_example_runs_through_the_root_re_exports() {
     let rgb = vec![0u8; w * h * 3];
     let depth = vec![0u16; w * h];
     let frame = Frame::new(camera.width, camera.height, &rgb, &depth, 0.001).expect("frame");
-    let hide = Rect { x: 0, y: 0, w: 10, h: 10 };
+    let hide = Rect {
+        x: 0,
+        y: 0,
+        w: 10,
+        h: 10,
+    };
     let out = tracker.process(&frame, &[hide]).expect("processed");
     // A black frame has no rope: reported lost, never a panic.
     assert!(out.is_lost() && out.nodes.is_empty());

@@ -96,7 +96,10 @@ mod tests {
             .iter()
             .map(|&x| Vec3::new(x, 0.0, 0.0))
             .collect();
-        let q: Vec<usize> = nodes.iter().map(|y| neighbour_count(y, &cloud, r)).collect();
+        let q: Vec<usize> = nodes
+            .iter()
+            .map(|y| neighbour_count(y, &cloud, r))
+            .collect();
         assert_eq!(q, vec![40, 40, 24, 5, 0]);
         // The paper's rule keeps the node past the edge visible (5 >= V_lim) ...
         assert_eq!(
@@ -109,9 +112,6 @@ mod tests {
             visible_nodes_relative(&nodes, &cloud, r, v, f),
             vec![true, true, true, false, false]
         );
-        assert_eq!(
-            visible_nodes_relative(&nodes, &[], r, v, f),
-            vec![false; 5]
-        );
+        assert_eq!(visible_nodes_relative(&nodes, &[], r, v, f), vec![false; 5]);
     }
 }

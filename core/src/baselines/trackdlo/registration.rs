@@ -429,7 +429,14 @@ mod tests {
         let run = |priors: &[Prior]| {
             let mut moved = nodes.clone();
             let mut variance = 0.0;
-            cpd_lle(&cloud, &mut moved, &mut variance, &s, priors, Some(&visible));
+            cpd_lle(
+                &cloud,
+                &mut moved,
+                &mut variance,
+                &s,
+                priors,
+                Some(&visible),
+            );
             moved
         };
         let with = run(&priors);
