@@ -27,8 +27,8 @@ echo "== core without std (thumbv7em-none-eabihf)"
 cargo build -p upetrack-core --no-default-features --target thumbv7em-none-eabihf --quiet
 echo "== core and synth for wasm32-unknown-unknown"
 cargo build -p upetrack-core -p upetrack-synth --no-default-features --target wasm32-unknown-unknown --quiet
-echo "== fuzz targets compile"
-cargo check --quiet --manifest-path fuzz/Cargo.toml
+echo "== fuzz targets: seeds and saved regressions replayed (scripts/fuzz-replay.sh)"
+./scripts/fuzz-replay.sh
 echo "== tests"
 cargo test --workspace
 

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 use upetrack::{Algorithm, Params};
 use upetrack_io::eval::Summary;
-use upetrack_synth::{RenderSettings, Scenario, ScenarioKind};
+use upetrack_synth::{RenderSettings, Scenario, ScenarioKind, SIMULATOR_VERSION};
 
 use crate::synth::write_scenario;
 use crate::{
@@ -78,11 +78,44 @@ fn case_dir(data: &Path, case: &Case) -> PathBuf {
     ))
 }
 
-/// Writes the case's sequence unless a complete one is already there.
+/// What the simulator makes of a case today: its version and a hash of the
+/// first frame (images and ground truth), so that a cached sequence written
+/// by another simulator is never reused.
+fn fingerprint(case: &Case) -> String {
+    let mut s = Scenario::new(case.kind, case.frames, case.seed, RenderSettings::default());
+    // FNV-1a over the first frame.
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |bytes: &[u8]| {
+        for &b in bytes {
+            h = (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+        }
+    };
+    if let Some(f) = s.next_frame() {
+        eat(&f.rgb);
+        f.depth.iter().for_each(|d| eat(&d.to_le_bytes()));
+        f.groundtruth
+            .iter()
+            .flat_map(|p| [p.x, p.y, p.z])
+            .for_each(|c| eat(&c.to_le_bytes()));
+    }
+    format!("simulator {SIMULATOR_VERSION}, first frame {h:016x}\n")
+}
+
+/// The file in a case's folder that records its [`fingerprint`].
+const FINGERPRINT_FILE: &str = "synth-fingerprint.txt";
+
+/// Writes the case's sequence unless a complete one written by the same
+/// simulator is already there.
 fn ensure_sequence(data: &Path, case: &Case) -> Result<PathBuf, CliError> {
     let dir = case_dir(data, case);
-    if dir.join("groundtruth.json").is_file() {
+    let print = fingerprint(case);
+    let cached = std::fs::read_to_string(dir.join(FINGERPRINT_FILE)).ok();
+    if dir.join("groundtruth.json").is_file() && cached.as_deref() == Some(print.as_str()) {
         return Ok(dir);
+    }
+    if dir.exists() {
+        eprintln!("{} was written by another simulator: writing it again", dir.display());
+        std::fs::remove_dir_all(&dir).map_err(|e| CliError(format!("{}: {e}", dir.display())))?;
     }
     eprintln!("writing {} ...", dir.display());
     let partial = dir.with_extension("partial");
@@ -94,6 +127,8 @@ fn ensure_sequence(data: &Path, case: &Case) -> Result<PathBuf, CliError> {
         Scenario::new(case.kind, case.frames, case.seed, RenderSettings::default()),
         &partial,
     )?;
+    std::fs::write(partial.join(FINGERPRINT_FILE), print)
+        .map_err(|e| CliError(format!("{}: {e}", partial.display())))?;
     std::fs::rename(&partial, &dir).map_err(|e| CliError(format!("{}: {e}", dir.display())))?;
     Ok(dir)
 }

@@ -464,6 +464,17 @@ fn compare_writes_both_tables_into_a_page_between_its_markers() {
     ] {
         assert!(text.contains(needle), "missing {needle}");
     }
+    // Regression: a cached sequence from another simulator was reused. A
+    // stale fingerprint makes the command write that sequence again.
+    let cached = data.join("static-s-12f-seed1");
+    let print = cached.join("synth-fingerprint.txt");
+    assert!(print.is_file(), "no fingerprint beside the cached sequence");
+    std::fs::write(&print, "simulator 0, first frame 0\n").expect("stale");
+    std::fs::write(cached.join("color/000000.jpg"), b"stale").expect("stale frame");
+    let o = compare();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("written by another simulator"));
+    assert_ne!(std::fs::read(cached.join("color/000000.jpg")).expect("frame"), b"stale");
     // Without the markers the page is left alone and the command fails.
     std::fs::write(&page, "no markers\n").expect("page");
     assert!(!compare().status.success());

@@ -15,4 +15,4 @@ pub mod scenario;
 
 pub use render::{RenderSettings, Rendered};
 pub use rope::{Rope, RopeSettings};
-pub use scenario::{Scenario, ScenarioKind, SynthFrame};
+pub use scenario::{Scenario, ScenarioKind, SynthFrame, SIMULATOR_VERSION};

@@ -15,6 +15,11 @@ use crate::rope::{Rope, RopeSettings};
 
 /// Frames of physics run before recording starts.
 pub const SETTLING_FRAMES: usize = 45;
+
+/// Version of what the scenarios produce: bump it whenever a change to the
+/// simulator, the renderer or a scenario changes their frames, so that
+/// cached sequences (`upetrack compare`) are written again.
+pub const SIMULATOR_VERSION: u32 = 1;
 /// Most frames one scenario records.
 pub const MAX_FRAMES: usize = 100_000;
 /// Margin added around the projected rope segment that an occlusion hides, pixels.
