@@ -22,7 +22,7 @@ USAGE:
   upetrack track <sequence> --out <result.json> [--algorithm A] [--params <params.json>]
   upetrack eval <sequence>... [--algorithm A,B,..] [--params <params.json>] [--json <out.json>] [--markdown <out.md>] [--per-frame <out.csv>]
   upetrack compare [--data <dir>] [--frames N] [--json <out.json>] [--markdown <out.md>] [--update <page.md>]
-  upetrack synth <scenario> <dir> [--frames N] [--seed S] [--hd]
+  upetrack synth <scenario> <dir> [--frames N] [--seed S] [--hd] [--variant V]
   upetrack bench [<sequence>...] [--frames N] [--repeat R] [--algorithm A,B,..]
   upetrack overlay <sequence> <result.json> <frame> <out.png> [--depth]
   upetrack scenarios
@@ -180,12 +180,12 @@ fn fmt(x: f64, digits: usize) -> String {
 /// The evaluation table in Markdown.
 fn markdown_table(rows: &[Summary]) -> String {
     let mut s = String::from(
-        "| sequence | algorithm | frames | lost | mean mm | median mm | IQR mm | mean px | median px | IQR px | occluded mean mm | occluded mean px | frames > 20 mm | median track ms | median total ms |\n\
-         |---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+        "| sequence | algorithm | frames | lost | mean mm | median mm | IQR mm | mean px | median px | IQR px | occluded mean mm | occluded mean px | max mm | max px | frames > 20 mm | hidden length error max | median track ms | median total ms |\n\
+         |---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
     for r in rows {
         s += &format!(
-            "| {} | {} | {} | {} | {} | {} | {}-{} | {} | {} | {}-{} | {} | {} | {} | {} | {} |\n",
+            "| {} | {} | {} | {} | {} | {} | {}-{} | {} | {} | {}-{} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
             r.sequence,
             r.algorithm,
             r.frames,
@@ -200,7 +200,14 @@ fn markdown_table(rows: &[Summary]) -> String {
             fmt(r.px.q3, 2),
             fmt(r.occluded_mean_mm, 2),
             fmt(r.occluded_mean_px, 2),
+            fmt(r.max_mm, 1),
+            fmt(r.max_px, 1),
             r.frames_above_20mm,
+            if r.hidden_length_error_max.is_finite() {
+                format!("{:.0} %", 100.0 * r.hidden_length_error_max)
+            } else {
+                "-".into()
+            },
             fmt(r.median_track_ms, 3),
             fmt(r.median_total_ms, 3),
         );

@@ -3,13 +3,13 @@
 use std::path::Path;
 use std::time::Instant;
 
-use upetrack::CameraIntrinsics;
 use upetrack_io::sequence::{
     DloConfig, GroundTruthFile, GroundTruthFrame, IntrinsicsFile, OcclusionConfig,
     SegmentationConfig,
 };
 use upetrack_io::write::{encode_depth_png, encode_jpeg, write_file, write_json, JPEG_QUALITY};
-use upetrack_synth::{RenderSettings, Scenario, ScenarioKind};
+use upetrack_synth::variant::D435I_1280X720;
+use upetrack_synth::{Scenario, ScenarioKind, Variant};
 
 use crate::{Args, CliError, USAGE};
 
@@ -17,22 +17,18 @@ use crate::{Args, CliError, USAGE};
 pub fn list_scenarios() {
     for k in ScenarioKind::EXAMPLES {
         let name = match k {
-            ScenarioKind::OcclusionSweep { .. } => "sweep-<K> (K in 10..=50)".to_string(),
+            ScenarioKind::OcclusionSweep { .. } => {
+                format!("sweep-<K> (K in 10..={})", ScenarioKind::MAX_SWEEP_PERCENT)
+            }
             _ => k.name(),
         };
         println!("{name:28} {}", k.description());
     }
+    println!("\nvariants (--variant):");
+    for v in Variant::ALL {
+        println!("{:28} {}", v.name, v.description);
+    }
 }
-
-/// Camera for `--hd`: the D435i colour stream at 1280x720.
-const D435I_1280X720: CameraIntrinsics = CameraIntrinsics {
-    width: 1280,
-    height: 720,
-    fx: 922.5,
-    fy: 922.5,
-    cx: 640.0,
-    cy: 360.0,
-};
 
 /// Writes `scenario` into `dir`; returns the number of frames written.
 pub fn write_scenario(mut scenario: Scenario, dir: &Path) -> Result<usize, CliError> {
@@ -71,6 +67,11 @@ pub fn write_scenario(mut scenario: Scenario, dir: &Path) -> Result<usize, CliEr
         gt.frames.push(GroundTruthFrame {
             frame: f.index,
             points: f.groundtruth.iter().map(|p| [p.x, p.y, p.z]).collect(),
+            occluded: if f.occluded.iter().any(|&o| o) {
+                f.occluded.clone()
+            } else {
+                Vec::new()
+            },
         });
         count += 1;
     }
@@ -78,9 +79,9 @@ pub fn write_scenario(mut scenario: Scenario, dir: &Path) -> Result<usize, CliEr
     Ok(count)
 }
 
-/// `upetrack synth <scenario> <dir> [--frames N] [--seed S] [--hd]`.
+/// `upetrack synth <scenario> <dir> [--frames N] [--seed S] [--hd] [--variant V]`.
 pub fn cmd_synth(raw: &[String]) -> Result<(), CliError> {
-    let args = Args::parse(raw, &["hd"], &["frames", "seed"])?;
+    let args = Args::parse(raw, &["hd"], &["frames", "seed", "variant"])?;
     let [name, dir] = args.positional.as_slice() else {
         return Err(CliError(format!(
             "synth takes a scenario and a folder\n\n{USAGE}"
@@ -99,12 +100,21 @@ pub fn cmd_synth(raw: &[String]) -> Result<(), CliError> {
         )));
     }
     let seed: u64 = args.number("seed", 1)?;
-    let mut render = RenderSettings::default();
+    let variant = match args.value("variant") {
+        None => Variant::BASE,
+        Some(v) => Variant::parse(v).ok_or_else(|| {
+            CliError(format!(
+                "unknown variant `{v}`; `upetrack scenarios` lists them"
+            ))
+        })?,
+    };
+    let mut render = variant.render();
     if args.flag("hd") {
         render.camera = D435I_1280X720;
     }
     let start = Instant::now();
-    let n = write_scenario(Scenario::new(kind, frames, seed, render), Path::new(dir))?;
+    let scenario = Scenario::with_rope(kind, frames, seed, render, variant.rope());
+    let n = write_scenario(scenario, Path::new(dir))?;
     eprintln!(
         "{}: {n} frames of {} written in {:.1} s",
         dir,

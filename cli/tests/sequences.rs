@@ -474,7 +474,10 @@ fn compare_writes_both_tables_into_a_page_between_its_markers() {
     let o = compare();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(String::from_utf8_lossy(&o.stderr).contains("written by another simulator"));
-    assert_ne!(std::fs::read(cached.join("color/000000.jpg")).expect("frame"), b"stale");
+    assert_ne!(
+        std::fs::read(cached.join("color/000000.jpg")).expect("frame"),
+        b"stale"
+    );
     // Without the markers the page is left alone and the command fails.
     std::fs::write(&page, "no markers\n").expect("page");
     assert!(!compare().status.success());

@@ -127,6 +127,49 @@ pub struct Summary {
     pub median_track_ms: f64,
     /// Median whole-frame time, ms.
     pub median_total_ms: f64,
+    /// Largest frame error in pixels.
+    pub max_px: f64,
+    /// Mean error (px) over the frames before the first occlusion.
+    pub clear_mean_px: f64,
+    /// Largest relative error of a hidden run's length against the true
+    /// rope's length for as many node spacings, over all frames (0.05 = 5 %).
+    pub hidden_length_error_max: f64,
+    /// The same, averaged over the frames with a hidden run.
+    pub hidden_length_error_mean: f64,
+}
+
+/// The relative length error of the worst hidden run of one frame: each
+/// maximal run of hidden nodes, with the visible node on each side, against
+/// `segments x L / (M - 1)` where `L` is the true rope length. `None` when
+/// no node is hidden (or there is nothing to compare).
+pub fn hidden_length_error(nodes: &[Vec3], visible: &[bool], true_length: f64) -> Option<f64> {
+    let m = nodes.len();
+    if m < 2 || visible.len() != m || !(true_length > 0.0) || visible.iter().all(|&v| !v) {
+        return None;
+    }
+    let spacing = true_length / (m - 1) as f64;
+    let mut worst: Option<f64> = None;
+    let mut i = 0;
+    while i < m {
+        if visible[i] {
+            i += 1;
+            continue;
+        }
+        let start = i;
+        while i < m && !visible[i] {
+            i += 1;
+        }
+        // Nodes start..i are hidden; include the visible neighbours.
+        let (a, b) = (start.saturating_sub(1), i.min(m - 1));
+        if b <= a {
+            continue;
+        }
+        let length: f64 = (a..b).map(|k| (nodes[k + 1] - nodes[k]).norm()).sum();
+        let expected = (b - a) as f64 * spacing;
+        let e = (length - expected).abs() / expected;
+        worst = Some(worst.map_or(e, |w| w.max(e)));
+    }
+    worst
 }
 
 /// Summarises `result` against `truth`.
@@ -144,6 +187,25 @@ pub fn summarise(
         Some(f) => errs.iter().filter(|e| e.frame >= f).collect(),
         None => Vec::new(),
     };
+    let clear: Vec<f64> = match first_occluded {
+        Some(f) => errs.iter().filter(|e| e.frame < f).map(|e| e.px).collect(),
+        None => px.clone(),
+    };
+    let length_errors: Vec<f64> = result
+        .frames
+        .iter()
+        .filter(|f| !f.lost)
+        .filter_map(|f| {
+            let gt = truth.get(f.frame)?.as_ref()?;
+            let true_length: f64 = gt.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
+            let nodes: Vec<Vec3> = f
+                .nodes
+                .iter()
+                .map(|p| Vec3::new(p[0], p[1], p[2]))
+                .collect();
+            hidden_length_error(&nodes, &f.visible, true_length)
+        })
+        .collect();
     let track: Vec<f64> = result.frames.iter().map(|f| f.track_ms).collect();
     let total: Vec<f64> = result.frames.iter().map(|f| f.total_ms).collect();
     Summary {
@@ -161,12 +223,43 @@ pub fn summarise(
         frames_above_20mm: mm.iter().filter(|&&e| e > FAILURE_THRESHOLD_MM).count(),
         median_track_ms: quantile(&track, 0.5),
         median_total_ms: quantile(&total, 0.5),
+        max_px: px.iter().copied().fold(f64::NAN, f64::max),
+        clear_mean_px: mean(&clear),
+        hidden_length_error_max: length_errors.iter().copied().fold(f64::NAN, f64::max),
+        hidden_length_error_mean: mean(&length_errors),
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn hidden_runs_are_measured_with_their_visible_neighbours() {
+        // Ten nodes 1 cm apart on a line; the true rope is 9 cm long.
+        let mut nodes: Vec<Vec3> = (0..10)
+            .map(|i| Vec3::new(i as f64 * 0.01, 0.0, 0.5))
+            .collect();
+        let mut visible = vec![true; 10];
+        assert_eq!(hidden_length_error(&nodes, &visible, 0.09), None);
+        // A middle run 4-5 stretched: node 5 moved 1 cm out of line.
+        visible[4] = false;
+        visible[5] = false;
+        nodes[5].y = 0.01;
+        let e = hidden_length_error(&nodes, &visible, 0.09).expect("a run");
+        // Segments 3-4, 4-5, 5-6: 1 + sqrt(2) + sqrt(2) cm against 3 cm.
+        let expected = (1.0 + 2.0 * 2f64.sqrt() - 3.0) / 3.0;
+        assert!((e - expected).abs() < 1e-12, "{e} vs {expected}");
+        // A hidden tail of two nodes at their spacing: no error there.
+        let mut visible = vec![true; 10];
+        visible[8] = false;
+        visible[9] = false;
+        let line: Vec<Vec3> = (0..10)
+            .map(|i| Vec3::new(i as f64 * 0.01, 0.0, 0.5))
+            .collect();
+        assert!(hidden_length_error(&line, &visible, 0.09).expect("tail") < 1e-12);
+        assert_eq!(hidden_length_error(&line, &[false; 10], 0.09), None);
+    }
 
     #[test]
     fn quantiles_interpolate() {

@@ -187,6 +187,11 @@ pub struct GroundTruthFrame {
     pub frame: usize,
     /// Ordered centre-line points, metres, colour camera frame.
     pub points: Vec<[f64; 3]>,
+    /// Optional: for each point, whether an occluder hides it from the
+    /// camera (written by `upetrack synth`; evaluation counts the frames
+    /// from the first such one as occluded when no rectangle says so).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub occluded: Vec<bool>,
 }
 
 /// `groundtruth.json`.
@@ -240,6 +245,8 @@ pub struct Sequence<S: Source> {
     pub config: DloConfig,
     /// Ground truth per frame index, when available.
     pub groundtruth: Vec<Option<Vec<Vec3>>>,
+    /// Per frame index: the ground truth says an occluder hides part of the rope.
+    pub groundtruth_occluded: Vec<bool>,
     /// Relative paths of colour frames, name-sorted.
     pub color_files: Vec<String>,
     /// Relative paths of depth frames, name-sorted.
@@ -392,6 +399,7 @@ impl<S: Source> Sequence<S> {
             .clone()
             .unwrap_or_else(|| "groundtruth.json".to_string());
         let mut groundtruth = vec![None; color_files.len()];
+        let mut groundtruth_occluded = vec![false; color_files.len()];
         if source.is_file(&gt_name) {
             let gt: GroundTruthFile = read_json(&source, &gt_name)?;
             let gt_path = source.display(&gt_name);
@@ -409,6 +417,9 @@ impl<S: Source> Sequence<S> {
                         &gt_path,
                         format!("frame {}: non-finite point", f.frame),
                     ));
+                }
+                if let Some(slot) = groundtruth_occluded.get_mut(f.frame) {
+                    *slot = f.occluded.iter().any(|&o| o);
                 }
                 if let Some(slot) = groundtruth.get_mut(f.frame) {
                     *slot = Some(
@@ -434,6 +445,7 @@ impl<S: Source> Sequence<S> {
             hsv,
             config,
             groundtruth,
+            groundtruth_occluded,
             color_files,
             depth_files,
         })
@@ -459,13 +471,12 @@ impl<S: Source> Sequence<S> {
             .collect()
     }
 
-    /// The first frame any occlusion applies to.
+    /// The first frame any occlusion applies to: a rectangle of `dlo.json`,
+    /// or a frame whose ground truth marks points hidden by an occluder.
     pub fn first_occluded_frame(&self) -> Option<usize> {
-        self.config
-            .occlusions
-            .iter()
-            .map(|o| o.frames[0] as usize)
-            .min()
+        let rect = self.config.occlusions.iter().map(|o| o.frames[0] as usize);
+        let truth = self.groundtruth_occluded.iter().position(|&o| o);
+        rect.chain(truth).min()
     }
 
     /// Reads and decodes frame `index`, checking both images against the intrinsics.

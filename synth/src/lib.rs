@@ -12,7 +12,9 @@ extern crate alloc;
 pub mod render;
 pub mod rope;
 pub mod scenario;
+pub mod variant;
 
 pub use render::{RenderSettings, Rendered};
 pub use rope::{Rope, RopeSettings};
 pub use scenario::{Scenario, ScenarioKind, SynthFrame, SIMULATOR_VERSION};
+pub use variant::Variant;

@@ -20,8 +20,13 @@ pub const D435I_BASELINE: f64 = 0.050;
 pub struct RenderSettings {
     /// Colour intrinsics (depth is aligned to colour).
     pub camera: CameraIntrinsics,
-    /// Camera height above the table, metres. Default 0.6.
+    /// Distance from the camera to the table's centre along the optical
+    /// axis, metres (its height when looking straight down). Default 0.6.
     pub camera_height: f64,
+    /// Tilt of the optical axis from straight down, radians, towards the
+    /// table's -y side (the camera moves to -y and looks back at the
+    /// centre). Default 0.
+    pub camera_tilt: f64,
     /// Rope albedo, RGB in [0, 1]. Default a mid blue like TrackDLO's rope.
     pub rope_color: [f64; 3],
     /// Table albedo, RGB in [0, 1]. Default off-white.
@@ -51,6 +56,7 @@ impl Default for RenderSettings {
         Self {
             camera: CameraIntrinsics::D435I_640X480,
             camera_height: 0.6,
+            camera_tilt: 0.0,
             rope_color: [0.08, 0.22, 0.55],
             table_color: [0.86, 0.87, 0.85],
             occluder_color: [0.45, 0.42, 0.38],
@@ -84,10 +90,59 @@ pub struct Rendered {
     pub depth: Vec<u16>,
 }
 
-/// World (table frame) to camera frame for a camera straight above the
-/// origin looking down: x right, y down (world -y), z forward (down).
-pub fn world_to_camera(p: &Vec3, height: f64) -> Vec3 {
-    Vec3::new(p.x, -p.y, height - p.z)
+/// Where the camera is: world-to-camera rotation (rows: the camera's x
+/// right, y down, z forward in world coordinates) and its centre.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CameraPose {
+    /// Rows of the rotation.
+    pub rows: [Vec3; 3],
+    /// Camera centre, world frame.
+    pub centre: Vec3,
+}
+
+impl CameraPose {
+    /// World (table frame) to camera frame.
+    pub fn world_to_camera(&self, p: &Vec3) -> Vec3 {
+        let d = p - self.centre;
+        Vec3::new(
+            self.rows[0].dot(&d),
+            self.rows[1].dot(&d),
+            self.rows[2].dot(&d),
+        )
+    }
+
+    /// A world-frame direction in the camera frame.
+    pub fn direction_to_camera(&self, d: &Vec3) -> Vec3 {
+        Vec3::new(
+            self.rows[0].dot(d),
+            self.rows[1].dot(d),
+            self.rows[2].dot(d),
+        )
+    }
+
+    /// A camera-frame direction in the world frame.
+    pub fn direction_to_world(&self, d: &Vec3) -> Vec3 {
+        self.rows[0] * d.x + self.rows[1] * d.y + self.rows[2] * d.z
+    }
+}
+
+impl RenderSettings {
+    /// The camera's pose: `camera_height` from the table's centre along an
+    /// axis tilted by `camera_tilt` from straight down.
+    pub fn pose(&self) -> CameraPose {
+        let (s, c) = (libm::sin(self.camera_tilt), libm::cos(self.camera_tilt));
+        let x = Vec3::new(1.0, 0.0, 0.0);
+        let z = Vec3::new(0.0, s, -c);
+        CameraPose {
+            rows: [x, z.cross(&x), z],
+            centre: Vec3::new(0.0, -self.camera_height * s, self.camera_height * c),
+        }
+    }
+
+    /// World (table frame) to camera frame.
+    pub fn world_to_camera(&self, p: &Vec3) -> Vec3 {
+        self.pose().world_to_camera(p)
+    }
 }
 
 #[derive(Clone, Copy)]
@@ -165,6 +220,27 @@ fn ray_box(rd: &Vec3, min: &Vec3, max: &Vec3) -> Option<(f64, Vec3)> {
     (t0 <= t1 && t0 > 0.0).then_some((t0, normal))
 }
 
+/// `true` when a box lies between the camera and the near side of the rope
+/// at `point` (world frame, rope radius `radius`).
+pub fn hidden_by_boxes(
+    settings: &RenderSettings,
+    point: &Vec3,
+    radius: f64,
+    boxes: &[OccluderBox],
+) -> bool {
+    let pose = settings.pose();
+    let to = point - pose.centre;
+    let dist = math::norm(&to);
+    if !(dist > radius) {
+        return false;
+    }
+    let dir = to / dist;
+    boxes.iter().any(|b| {
+        ray_box(&dir, &(b.min - pose.centre), &(b.max - pose.centre))
+            .is_some_and(|(t, _)| t < dist - radius)
+    })
+}
+
 /// Smooth value noise in [0, 1] on a lattice of `cell` metres (table texture).
 fn value_noise(x: f64, y: f64, cell: f64, seed: u64) -> f64 {
     let hash = |i: i64, j: i64| {
@@ -193,11 +269,8 @@ pub fn render(
 ) -> Rendered {
     let cam = &settings.camera;
     let (w, h) = (cam.width as usize, cam.height as usize);
-    let height = settings.camera_height;
-    let pts: Vec<Vec3> = particles
-        .iter()
-        .map(|p| world_to_camera(p, height))
-        .collect();
+    let pose = settings.pose();
+    let pts: Vec<Vec3> = particles.iter().map(|p| pose.world_to_camera(p)).collect();
     let mut arc = vec![0.0; pts.len()];
     for i in 1..pts.len() {
         arc[i] = arc[i - 1] + math::norm(&(pts[i] - pts[i - 1]));
@@ -210,12 +283,16 @@ pub fn render(
         );
         d / math::norm(&d)
     };
-    // Start with the table everywhere: plane z = height in camera frame.
-    let mut dist = vec![0.0f64; w * h];
+    // Start with the table (world z = 0) everywhere it is in view; above
+    // the horizon of a tilted camera nothing is hit (no depth, black).
+    let mut dist = vec![f64::INFINITY; w * h];
     let mut surf = vec![Surface::Table; w * h];
     for v in 0..h {
         for u in 0..w {
-            dist[v * w + u] = height / ray(u, v).z;
+            let down = pose.direction_to_world(&ray(u, v)).z;
+            if down < 0.0 {
+                dist[v * w + u] = -pose.centre.z / down;
+            }
         }
     }
     let bbox = |ps: &[Vec3], margin: f64| -> Option<(usize, usize, usize, usize)> {
@@ -282,23 +359,23 @@ pub fn render(
                     if c & 2 == 0 { bx.min.y } else { bx.max.y },
                     if c & 4 == 0 { bx.min.z } else { bx.max.z },
                 );
-                world_to_camera(&p, height)
+                pose.world_to_camera(&p)
             })
             .collect();
-        let (mn, mx) = corners.iter().fold(
-            (Vec3::repeat(f64::MAX), Vec3::repeat(f64::MIN)),
-            |(a, b), p| (a.inf(p), b.sup(p)),
-        );
-        if mn.z <= 1e-3 {
+        if corners.iter().any(|p| p.z <= 1e-3) {
             continue;
         }
         let Some((u0, u1, v0, v1)) = bbox(&corners, 2.0) else {
             continue;
         };
+        // The box is axis-aligned in the world: intersect there, from the
+        // camera centre, and turn the normal into the camera frame.
+        let (mn, mx) = (bx.min - pose.centre, bx.max - pose.centre);
         for v in v0..v1.min(h) {
             for u in u0..u1.min(w) {
                 let rd = ray(u, v);
-                if let Some((t, n)) = ray_box(&rd, &mn, &mx) {
+                if let Some((t, n)) = ray_box(&pose.direction_to_world(&rd), &mn, &mx) {
+                    let n = pose.direction_to_camera(&n);
                     let k = v * w + u;
                     if t < dist[k] {
                         dist[k] = t;
@@ -320,18 +397,25 @@ pub fn render(
         for u in 0..w {
             let k = v * w + u;
             let rd = ray(u, v);
+            if !dist[k].is_finite() {
+                // Nothing in view (above a tilted camera's horizon).
+                depth_m[k] = f64::INFINITY;
+                continue;
+            }
             let p = rd * dist[k];
             depth_m[k] = p.z;
             let (albedo, lambert, texture) = match surf[k] {
                 Surface::Table => {
-                    let world_x = p.x;
-                    let world_y = -p.y;
+                    let world = pose.centre + pose.direction_to_world(&p);
+                    let (world_x, world_y) = (world.x, world.y);
                     let t = 0.94
                         + 0.06 * value_noise(world_x, world_y, 0.01, tex_seed)
                         + 0.03 * (value_noise(world_x, world_y, 0.002, tex_seed + 1) - 0.5);
                     (
                         settings.table_color,
-                        light.dot(&Vec3::new(0.0, 0.0, -1.0)).max(0.0),
+                        light
+                            .dot(&pose.direction_to_camera(&Vec3::new(0.0, 0.0, 1.0)))
+                            .max(0.0),
                         t,
                     )
                 }
@@ -372,6 +456,9 @@ pub fn render(
         for u in 0..w {
             let k = v * w + u;
             let z = depth_m[k];
+            if !z.is_finite() {
+                continue;
+            }
             let mut edge_other = None;
             for (du, dv) in [(-1i64, 0i64), (1, 0), (0, -1), (0, 1)] {
                 let (nu, nv) = (u as i64 + du, v as i64 + dv);

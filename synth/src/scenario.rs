@@ -10,7 +10,7 @@ use upetrack::perception::segmentation::rgb_to_hsv;
 use upetrack::rng::SplitMix64;
 use upetrack::{CameraIntrinsics, HsvRange, Rect};
 
-use crate::render::{render, world_to_camera, OccluderBox, RenderSettings};
+use crate::render::{hidden_by_boxes, render, OccluderBox, RenderSettings};
 use crate::rope::{Rope, RopeSettings};
 
 /// Frames of physics run before recording starts.
@@ -19,7 +19,7 @@ pub const SETTLING_FRAMES: usize = 45;
 /// Version of what the scenarios produce: bump it whenever a change to the
 /// simulator, the renderer or a scenario changes their frames, so that
 /// cached sequences (`upetrack compare`) are written again.
-pub const SIMULATOR_VERSION: u32 = 1;
+pub const SIMULATOR_VERSION: u32 = 2;
 /// Most frames one scenario records.
 pub const MAX_FRAMES: usize = 100_000;
 /// Margin added around the projected rope segment that an occlusion hides, pixels.
@@ -43,28 +43,45 @@ pub enum ScenarioKind {
     LiftedSwing,
     /// A fast pull (about 0.3 m/s) without occlusion.
     FastPull,
+    /// A gripper comes down on one end, lifts it 10 cm and swings it; its
+    /// palm and arm (real boxes) hide the held end from the camera.
+    GripperSwing,
+    /// A box travels low over one end of the rope, rising and sinking as
+    /// it goes (an occluder in depth, no rectangle) while the far end is dragged.
+    BoxOverEnd,
+    /// The same box over the middle of the rope.
+    BoxOverMiddle,
 }
 
 impl ScenarioKind {
     /// One of each scenario (the sweep at 30 %).
-    pub const EXAMPLES: [Self; 6] = [
+    pub const EXAMPLES: [Self; 9] = [
         Self::StaticS,
         Self::DynamicPull,
         Self::TipDrag,
         Self::OcclusionSweep { percent: 30 },
         Self::LiftedSwing,
         Self::FastPull,
+        Self::GripperSwing,
+        Self::BoxOverEnd,
+        Self::BoxOverMiddle,
     ];
 
     /// Every scenario's command-line name.
-    pub const NAMES: [&'static str; 6] = [
+    pub const NAMES: [&'static str; 9] = [
         "static-s",
         "dynamic-pull",
         "tip-drag",
         "sweep-<K>",
         "lifted-swing",
         "fast-pull",
+        "gripper-swing",
+        "box-over-end",
+        "box-over-middle",
     ];
+
+    /// Largest share of the rope a sweep may hide, percent.
+    pub const MAX_SWEEP_PERCENT: u8 = 70;
 
     /// Parses a command-line name (`sweep-30` for a 30 % sweep).
     pub fn parse(name: &str) -> Option<Self> {
@@ -74,9 +91,12 @@ impl ScenarioKind {
             "tip-drag" => Self::TipDrag,
             "lifted-swing" => Self::LiftedSwing,
             "fast-pull" => Self::FastPull,
+            "gripper-swing" => Self::GripperSwing,
+            "box-over-end" => Self::BoxOverEnd,
+            "box-over-middle" => Self::BoxOverMiddle,
             other => {
                 let k: u8 = other.strip_prefix("sweep-")?.parse().ok()?;
-                if !(10..=50).contains(&k) {
+                if !(10..=Self::MAX_SWEEP_PERCENT).contains(&k) {
                     return None;
                 }
                 Self::OcclusionSweep { percent: k }
@@ -93,6 +113,9 @@ impl ScenarioKind {
             Self::OcclusionSweep { percent } => alloc::format!("sweep-{percent}"),
             Self::LiftedSwing => "lifted-swing".into(),
             Self::FastPull => "fast-pull".into(),
+            Self::GripperSwing => "gripper-swing".into(),
+            Self::BoxOverEnd => "box-over-end".into(),
+            Self::BoxOverMiddle => "box-over-middle".into(),
         }
     }
 
@@ -102,9 +125,12 @@ impl ScenarioKind {
             Self::StaticS => "static S-shaped rope; from 30 % of the frames on, its lower bend is hidden (paper scenario I)",
             Self::DynamicPull => "S-shaped rope; its lower bend is hidden from 30 % of the frames on, and from 40 % its nearer end is pulled 12 cm (paper scenario II)",
             Self::TipDrag => "one tip (15 % of the rope) hidden from 30 % of the frames on while the other end drags the rope 12 cm",
-            Self::OcclusionSweep { .. } => "TrackDLO's protocol: a rectangle hides the first K % of the rope from 30 % of the frames on while the far end is pulled 8 cm",
+            Self::OcclusionSweep { .. } => "TrackDLO's protocol: a rectangle hides the first K % (10-70) of the rope from 30 % of the frames on while the far end is pulled 8 cm",
             Self::LiftedSwing => "one end lifted 12 cm and swung in a circle; a grey box passes between camera and rope",
             Self::FastPull => "one end pulled 25 cm in a third of the sequence (about 0.3 m/s at 30 fps), no occlusion",
+            Self::GripperSwing => "a gripper comes down on one end, lifts it 10 cm and swings it in a circle; its palm and arm hide the held end in depth",
+            Self::BoxOverEnd => "a box travels 6-10 cm above the table over one end (an occluder in depth, no rectangle) while the other end is dragged 10 cm",
+            Self::BoxOverMiddle => "a box travels 6-10 cm above the table over the middle of the rope while one end is dragged 10 cm",
         }
     }
 }
@@ -131,6 +157,9 @@ pub struct SynthFrame {
     pub depth: Vec<u16>,
     /// Centre line, ordered, metres, colour camera frame.
     pub groundtruth: Vec<Vec3>,
+    /// For each ground-truth point: hidden by an occluder (a box between it
+    /// and the camera, or an occlusion rectangle over its pixel).
+    pub occluded: Vec<bool>,
 }
 
 /// A grasp moving a particle from its settled position by `offset` between two frames.
@@ -142,6 +171,34 @@ struct Pull {
     /// World-frame displacement, or the swing radius for a circular path.
     offset: Vec3,
     circular: bool,
+}
+
+/// How an occluder box moves while it is in the scene.
+#[derive(Debug, Clone, Copy)]
+enum BoxPath {
+    /// From its corners at the first frame by `travel` at the last, lifted
+    /// by `bob sin(pi x)` on the way; `dwell` slows it over the middle of
+    /// its path (position `0.5 + 0.5 (2x - 1)^3` instead of `x`).
+    Linear { travel: Vec3, bob: f64, dwell: bool },
+    /// Rides on grasp `pull` (corners relative to the grasp's target), and
+    /// comes down from `descent` above over the `approach` frames before
+    /// the grasp starts.
+    Gripper {
+        pull: usize,
+        descent: f64,
+        approach: usize,
+    },
+}
+
+/// An occluder box over a frame range (inclusive).
+#[derive(Debug, Clone, Copy)]
+struct MovingBox {
+    first: usize,
+    last: usize,
+    /// Corners at the start (world frame; relative to the grasp target for
+    /// a gripper).
+    shape: OccluderBox,
+    path: BoxPath,
 }
 
 /// A scenario being recorded.
@@ -159,7 +216,7 @@ pub struct Scenario {
     rng: SplitMix64,
     next: usize,
     pulls: Vec<(Pull, Vec3)>,
-    boxes: Vec<(usize, usize, OccluderBox, Vec3)>,
+    boxes: Vec<MovingBox>,
 }
 
 /// An S laid on the table: one period of a sine across the view.
@@ -199,6 +256,17 @@ impl Scenario {
     /// Sets up `kind` with `frames` frames (at least 1) and a seed; the rope
     /// is settled before recording starts.
     pub fn new(kind: ScenarioKind, frames: usize, seed: u64, render: RenderSettings) -> Self {
+        Self::with_rope(kind, frames, seed, render, RopeSettings::default())
+    }
+
+    /// [`Scenario::new`] with a rope of its own (thickness, length, stiffness).
+    pub fn with_rope(
+        kind: ScenarioKind,
+        frames: usize,
+        seed: u64,
+        render: RenderSettings,
+        rope_settings: RopeSettings,
+    ) -> Self {
         let frames = frames.clamp(1, MAX_FRAMES);
         let mut rng = SplitMix64::new(seed);
         let shape = match kind {
@@ -215,7 +283,7 @@ impl Scenario {
             .iter()
             .map(|p| Vec3::new(c * p.x - s * p.y, s * p.x + c * p.y, 0.0) + shift)
             .collect();
-        let mut rope = Rope::laid_along(&shape, RopeSettings::default());
+        let mut rope = Rope::laid_along(&shape, rope_settings);
         for _ in 0..SETTLING_FRAMES {
             rope.step(1.0 / 30.0);
         }
@@ -269,15 +337,93 @@ impl Scenario {
                 // Halfway between the rope's ends and its apex, so that the
                 // box crosses both legs as it travels along x.
                 let y0 = 0.5 * (rope.x[frac(0.5)].y + rope.x[0].y);
-                boxes.push((
-                    at(0.35),
-                    at(0.8),
-                    OccluderBox {
+                boxes.push(MovingBox {
+                    first: at(0.35),
+                    last: at(0.8),
+                    shape: OccluderBox {
                         min: Vec3::new(-0.45, y0 - 0.04, 0.20),
                         max: Vec3::new(-0.40, y0 + 0.04, 0.22),
                     },
-                    Vec3::new(0.75, 0.0, 0.0),
-                ));
+                    path: BoxPath::Linear {
+                        travel: Vec3::new(0.75, 0.0, 0.0),
+                        bob: 0.0,
+                        dwell: false,
+                    },
+                });
+            }
+            ScenarioKind::GripperSwing => {
+                let start = at(0.3);
+                // The first end, swung towards the middle of the view.
+                pulls.push(Pull {
+                    particle: 0,
+                    start,
+                    end: at(0.95),
+                    offset: Vec3::new(-0.05, 0.0, 0.10),
+                    circular: true,
+                });
+                let approach = start.min(15);
+                let r = rope.settings.thickness * 0.5;
+                // Palm over the held end, arm up from it, forearm away to +y.
+                for shape in [
+                    OccluderBox {
+                        min: Vec3::new(-0.035, -0.035, r + 0.005),
+                        max: Vec3::new(0.035, 0.035, r + 0.025),
+                    },
+                    OccluderBox {
+                        min: Vec3::new(-0.02, -0.02, r + 0.025),
+                        max: Vec3::new(0.02, 0.02, 0.20),
+                    },
+                    OccluderBox {
+                        min: Vec3::new(-0.02, -0.02, 0.18),
+                        max: Vec3::new(0.02, 0.28, 0.22),
+                    },
+                ] {
+                    boxes.push(MovingBox {
+                        first: start - approach,
+                        last: frames - 1,
+                        shape,
+                        path: BoxPath::Gripper {
+                            pull: 0,
+                            descent: 0.15,
+                            approach,
+                        },
+                    });
+                }
+            }
+            ScenarioKind::BoxOverEnd | ScenarioKind::BoxOverMiddle => {
+                let over_end = kind == ScenarioKind::BoxOverEnd;
+                // Over the last end, kept 3 cm inside the view.
+                let target = if over_end {
+                    rope.x[last] - Vec3::new(0.03, 0.0, 0.0)
+                } else {
+                    rope.x[frac(0.5)]
+                };
+                pulls.push(Pull {
+                    particle: if over_end { 0 } else { last },
+                    start: at(0.35),
+                    end: at(0.9),
+                    offset: if over_end {
+                        Vec3::new(-0.06, 0.08, 0.0)
+                    } else {
+                        Vec3::new(0.06, 0.08, 0.0)
+                    },
+                    circular: false,
+                });
+                // A 10 x 10 x 3 cm box passing along y over the target,
+                // 6 cm above the table, rising 4 cm on the way, slowest over it.
+                boxes.push(MovingBox {
+                    first: at(0.3),
+                    last: at(0.85),
+                    shape: OccluderBox {
+                        min: Vec3::new(target.x - 0.05, target.y - 0.25, 0.06),
+                        max: Vec3::new(target.x + 0.05, target.y - 0.15, 0.09),
+                    },
+                    path: BoxPath::Linear {
+                        travel: Vec3::new(0.0, 0.40, 0.0),
+                        bob: 0.04,
+                        dwell: true,
+                    },
+                });
             }
             ScenarioKind::FastPull => {
                 pulls.push(Pull {
@@ -294,7 +440,7 @@ impl Scenario {
             let cam = render.camera;
             let (mut u0, mut v0, mut u1, mut v1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
             for p in &rope.x[i0..=i1.min(last)] {
-                if let Some(q) = cam.project(&world_to_camera(p, render.camera_height)) {
+                if let Some(q) = cam.project(&render.world_to_camera(p)) {
                     u0 = u0.min(q.x);
                     v0 = v0.min(q.y);
                     u1 = u1.max(q.x);
@@ -352,8 +498,9 @@ impl Scenario {
         }
         let f = self.next;
         self.next += 1;
+        let mut targets: Vec<Vec3> = self.pulls.iter().map(|(_, origin)| *origin).collect();
         if f > 0 {
-            for (p, origin) in &self.pulls {
+            for (k, (p, origin)) in self.pulls.iter().enumerate() {
                 if f < p.start {
                     continue;
                 }
@@ -371,6 +518,7 @@ impl Scenario {
                 } else {
                     origin + p.offset * x
                 };
+                targets[k] = target;
                 self.rope.grasp(p.particle, target);
             }
             self.rope.step(1.0 / 30.0);
@@ -378,12 +526,38 @@ impl Scenario {
         let boxes: Vec<OccluderBox> = self
             .boxes
             .iter()
-            .filter(|b| (b.0..=b.1).contains(&f))
-            .map(|&(s, e, bx, travel)| {
-                let x = (f - s) as f64 / (e - s).max(1) as f64;
-                OccluderBox {
-                    min: bx.min + travel * x,
-                    max: bx.max + travel * x,
+            .filter(|b| (b.first..=b.last).contains(&f))
+            .map(|b| match b.path {
+                BoxPath::Linear { travel, bob, dwell } => {
+                    let x = (f - b.first) as f64 / (b.last - b.first).max(1) as f64;
+                    let along = if dwell {
+                        0.5 + 0.5 * libm::pow(2.0 * x - 1.0, 3.0)
+                    } else {
+                        x
+                    };
+                    let lift = Vec3::new(0.0, 0.0, bob * libm::sin(core::f64::consts::PI * x));
+                    OccluderBox {
+                        min: b.shape.min + travel * along + lift,
+                        max: b.shape.max + travel * along + lift,
+                    }
+                }
+                BoxPath::Gripper {
+                    pull,
+                    descent,
+                    approach,
+                } => {
+                    let start = self.pulls.get(pull).map_or(0, |(p, _)| p.start);
+                    let target = targets.get(pull).copied().unwrap_or_default();
+                    let coming = if f < start {
+                        1.0 - smoothstep((f + approach - start) as f64 / approach.max(1) as f64)
+                    } else {
+                        0.0
+                    };
+                    let at = target + Vec3::new(0.0, 0.0, descent * coming);
+                    OccluderBox {
+                        min: b.shape.min + at,
+                        max: b.shape.max + at,
+                    }
                 }
             })
             .collect();
@@ -394,12 +568,43 @@ impl Scenario {
             &boxes,
             &mut self.rng,
         );
-        let h = self.render.camera_height;
+        let pose = self.render.pose();
+        let groundtruth: Vec<Vec3> = self
+            .rope
+            .x
+            .iter()
+            .map(|p| pose.world_to_camera(p))
+            .collect();
+        let cam = self.render.camera;
+        let rects: Vec<Rect> = self
+            .occlusions
+            .iter()
+            .filter(|o| (o.first..=o.last).contains(&f))
+            .map(|o| o.rect)
+            .collect();
+        let occluded = self
+            .rope
+            .x
+            .iter()
+            .zip(&groundtruth)
+            .map(|(world, p)| {
+                let in_rect = cam.project(p).is_some_and(|q| {
+                    rects.iter().any(|r| {
+                        q.x >= r.x as f64
+                            && q.x < (r.x + r.w) as f64
+                            && q.y >= r.y as f64
+                            && q.y < (r.y + r.h) as f64
+                    })
+                });
+                in_rect || hidden_by_boxes(&self.render, world, self.rope.radius(), &boxes)
+            })
+            .collect();
         Some(SynthFrame {
             index: f,
             rgb: r.rgb,
             depth: r.depth,
-            groundtruth: self.rope.x.iter().map(|p| world_to_camera(p, h)).collect(),
+            groundtruth,
+            occluded,
         })
     }
 
@@ -423,7 +628,11 @@ mod tests {
         for k in ScenarioKind::EXAMPLES {
             assert_eq!(ScenarioKind::parse(&k.name()), Some(k));
         }
-        assert_eq!(ScenarioKind::parse("sweep-60"), None);
+        assert_eq!(ScenarioKind::parse("sweep-80"), None);
+        assert_eq!(
+            ScenarioKind::parse("sweep-70"),
+            Some(ScenarioKind::OcclusionSweep { percent: 70 })
+        );
         assert_eq!(ScenarioKind::parse("nope"), None);
     }
 
