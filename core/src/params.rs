@@ -42,8 +42,13 @@ pub struct Params {
     pub voxel_size: f64,
     /// Radius of the rope, metres: the cloud (its visible surface) is moved
     /// `pi/4` of it away from the camera to lie on the centre line. 0 turns
-    /// the correction off. Default 7.5 mm (the paper's 15 mm thick rope).
+    /// the correction off. Default 7.5 mm (the paper's 15 mm thick rope);
+    /// used until, and unless, `estimate_radius` measures the rope.
     pub dlo_radius: f64,
+    /// Measure the rope's radius at initialisation from its width in the
+    /// image and its depth (5-20 mm ropes alike), and use that instead of
+    /// `dlo_radius`. Default true; false keeps `dlo_radius` throughout.
+    pub estimate_radius: bool,
     /// Nearest valid depth, metres. Default 0.1 m.
     pub min_depth: f64,
     /// Farthest valid depth, metres. Default 3 m.
@@ -82,6 +87,7 @@ impl Default for Params {
             visibility_min_fraction: 0.5,
             voxel_size: 0.008,
             dlo_radius: 0.0075,
+            estimate_radius: true,
             min_depth: 0.1,
             max_depth: 3.0,
             min_blob_pixels: 150,
@@ -172,13 +178,18 @@ impl Params {
         self.trackdlo.validate()
     }
 
-    /// The point cloud settings.
+    /// The point cloud settings, for a rope of radius `dlo_radius`.
     pub fn cloud(&self) -> CloudSettings {
+        self.cloud_for_radius(self.dlo_radius)
+    }
+
+    /// The point cloud settings for a rope of radius `radius`, metres.
+    pub fn cloud_for_radius(&self, radius: f64) -> CloudSettings {
         CloudSettings {
             min_depth: self.min_depth,
             max_depth: self.max_depth,
             voxel_size: self.voxel_size,
-            axis_offset: self.dlo_radius * SURFACE_TO_AXIS_RATIO,
+            axis_offset: radius * SURFACE_TO_AXIS_RATIO,
         }
     }
 
@@ -188,6 +199,7 @@ impl Params {
             node_count: self.node_count,
             min_blob_pixels: self.min_blob_pixels,
             cloud: self.cloud(),
+            estimate_radius: self.estimate_radius && self.dlo_radius > 0.0,
         }
     }
 }

@@ -9,7 +9,7 @@ use alloc::vec::Vec;
 
 use super::camera::CameraIntrinsics;
 use super::frame::Frame;
-use super::point_cloud::{depth_at, push_along_rays, CloudSettings};
+use super::point_cloud::{depth_at, push_along_rays, CloudSettings, SURFACE_TO_AXIS_RATIO};
 use super::segmentation::Mask;
 use crate::math::{Vec2, Vec3};
 use crate::upe::resampling::{polyline_length, resample_uniform};
@@ -236,6 +236,14 @@ fn extend_end(path: &mut Vec<Vec2>, blob: &Mask) {
 /// from one end of the largest blob to the other. The end with the smaller
 /// x (then smaller y) comes first.
 pub fn find_centre_line(mask: &Mask, min_blob_pixels: u32) -> Result<Vec<Vec2>, InitError> {
+    centre_line_of_largest_blob(mask, min_blob_pixels).map(|(path, _)| path)
+}
+
+/// [`find_centre_line`] with the number of pixels of the blob it runs through.
+fn centre_line_of_largest_blob(
+    mask: &Mask,
+    min_blob_pixels: u32,
+) -> Result<(Vec<Vec2>, usize), InitError> {
     let blob = largest_blob(mask);
     if blob.len() < min_blob_pixels.max(1) as usize {
         return Err(InitError::NoRope {
@@ -275,7 +283,7 @@ pub fn find_centre_line(mask: &Mask, min_blob_pixels: u32) -> Result<Vec<Vec2>, 
     if (last.x, last.y) < (first.x, first.y) {
         path.reverse();
     }
-    Ok(path)
+    Ok((path, blob.len()))
 }
 
 /// Lifts an image centre line to 3D: the median valid depth of rope pixels
@@ -364,6 +372,39 @@ pub struct Initialisation {
     pub nodes: Vec<Vec3>,
     /// Length of the centre line, metres.
     pub length: f64,
+    /// The rope's radius estimated from its width in the image, metres
+    /// (`None` when not asked for or not measurable).
+    pub radius: Option<f64>,
+}
+
+/// Smallest radius an estimate may give, metres (a thread).
+pub const MIN_ESTIMATED_RADIUS: f64 = 0.0005;
+/// Largest radius an estimate may give, metres (a hose).
+pub const MAX_ESTIMATED_RADIUS: f64 = 0.05;
+
+/// The rope's radius from its blob: the mean width in pixels (blob pixels
+/// over the centre line's length in pixels) at the median depth of the
+/// centre line, `r = w z / (2 f)`. `None` outside the plausible range.
+pub fn estimate_radius(
+    blob_pixels: usize,
+    path: &[Vec2],
+    line: &[Vec3],
+    camera: &CameraIntrinsics,
+) -> Option<f64> {
+    let length_px: f64 = path.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
+    if !(length_px > 0.0) || line.is_empty() {
+        return None;
+    }
+    let mut z: Vec<f64> = line.iter().map(|p| p.z).filter(|z| z.is_finite()).collect();
+    if z.is_empty() {
+        return None;
+    }
+    z.sort_by(f64::total_cmp);
+    let width_px = blob_pixels as f64 / length_px;
+    let r = 0.5 * width_px * z[z.len() / 2] / (0.5 * (camera.fx + camera.fy));
+    (MIN_ESTIMATED_RADIUS..=MAX_ESTIMATED_RADIUS)
+        .contains(&r)
+        .then_some(r)
 }
 
 /// What initialisation needs from the parameters.
@@ -375,6 +416,9 @@ pub struct InitSettings {
     pub min_blob_pixels: u32,
     /// Depth range and the surface-to-axis push of the 3D lift.
     pub cloud: CloudSettings,
+    /// Estimate the radius from the image and push the line by it instead
+    /// of by `cloud.axis_offset`.
+    pub estimate_radius: bool,
 }
 
 /// The whole stage: centre line, 3D lift, even placement of `M` nodes.
@@ -384,8 +428,20 @@ pub fn initialise(
     camera: &CameraIntrinsics,
     settings: &InitSettings,
 ) -> Result<Initialisation, InitError> {
-    let path = find_centre_line(mask, settings.min_blob_pixels)?;
-    let line = lift_to_3d(&path, frame, mask, camera, &settings.cloud)?;
+    let (path, blob_pixels) = centre_line_of_largest_blob(mask, settings.min_blob_pixels)?;
+    let mut line = lift_to_3d(&path, frame, mask, camera, &settings.cloud)?;
+    let mut radius = None;
+    if settings.estimate_radius {
+        radius = estimate_radius(blob_pixels, &path, &line, camera);
+        if let Some(r) = radius {
+            // Lift again, pushed to the axis of a rope of this radius.
+            let cloud = CloudSettings {
+                axis_offset: r * SURFACE_TO_AXIS_RATIO,
+                ..settings.cloud
+            };
+            line = lift_to_3d(&path, frame, mask, camera, &cloud)?;
+        }
+    }
     let length = polyline_length(&line);
     if !(length > 0.0) || !length.is_finite() {
         return Err(InitError::TooShort { pixels: path.len() });
@@ -393,6 +449,7 @@ pub fn initialise(
     Ok(Initialisation {
         nodes: resample_uniform(&line, settings.node_count),
         length,
+        radius,
     })
 }
 

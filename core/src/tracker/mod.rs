@@ -120,6 +120,8 @@ struct TrackState {
 pub struct TrackerSnapshot {
     state: Option<TrackState>,
     known_length: Option<f64>,
+    #[cfg_attr(feature = "serde", serde(default))]
+    known_radius: Option<f64>,
     stepper: Stepper,
 }
 
@@ -132,6 +134,8 @@ pub struct Tracker {
     state: Option<TrackState>,
     /// Length at the first initialisation, metres.
     known_length: Option<f64>,
+    /// Radius measured at the first initialisation, metres.
+    known_radius: Option<f64>,
     /// The per-frame step of `params.algorithm`.
     stepper: Stepper,
 }
@@ -152,6 +156,7 @@ impl Tracker {
             hsv,
             state: None,
             known_length: None,
+            known_radius: None,
             stepper: Stepper::new(params.algorithm),
         })
     }
@@ -209,6 +214,7 @@ impl Tracker {
         TrackerSnapshot {
             state: self.state.clone(),
             known_length: self.known_length,
+            known_radius: self.known_radius,
             stepper: self.stepper.clone(),
         }
     }
@@ -226,6 +232,7 @@ impl Tracker {
             s
         });
         self.known_length = snapshot.known_length;
+        self.known_radius = snapshot.known_radius;
         self.stepper = snapshot.stepper;
         if restart {
             self.stepper = Stepper::new(self.params.algorithm);
@@ -238,6 +245,7 @@ impl Tracker {
     pub fn reset(&mut self) {
         self.state = None;
         self.known_length = None;
+        self.known_radius = None;
         self.stepper = Stepper::new(self.params.algorithm);
     }
 
@@ -249,8 +257,21 @@ impl Tracker {
     ) -> Result<Observation, TrackerError> {
         frame.check_camera(&self.camera)?;
         let mask = segment(frame, &self.hsv, occlusions);
-        let cloud = build_cloud(frame, &mask, &self.camera, &self.params.cloud());
+        let cloud = build_cloud(frame, &mask, &self.camera, &self.cloud_settings());
         Ok(Observation { mask, cloud })
+    }
+
+    /// The rope's radius in force, metres: measured at the first
+    /// initialisation (`Params::estimate_radius`) or `Params::dlo_radius`.
+    pub fn radius(&self) -> f64 {
+        match (self.params.estimate_radius, self.known_radius) {
+            (true, Some(r)) if self.params.dlo_radius > 0.0 => r,
+            _ => self.params.dlo_radius,
+        }
+    }
+
+    fn cloud_settings(&self) -> crate::perception::point_cloud::CloudSettings {
+        self.params.cloud_for_radius(self.radius())
     }
 
     /// The tracking step on an observation of `frame`. Never fails: a frame
@@ -332,6 +353,7 @@ impl Tracker {
             }
         } else {
             self.known_length = Some(init.length);
+            self.known_radius = init.radius;
         }
         let p = &self.params;
         let visible = visible_nodes_relative(

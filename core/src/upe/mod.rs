@@ -7,9 +7,10 @@
 pub mod occlusion;
 pub mod registration;
 pub mod resampling;
+pub mod slide;
 pub mod visibility;
 
-use occlusion::{estimate_hidden, UpeCoefficients, UpeReport};
+use occlusion::{estimate_hidden, HiddenMotion, UpeCoefficients, UpeReport};
 use registration::{register, EmReport, EmSettings, MAX_EM_ITERATIONS};
 use resampling::resample_uniform;
 
@@ -38,6 +39,11 @@ pub struct UpeTrackParams {
     /// neighbours and keeps its shape); `displacement_weight` gives the
     /// paper's rule. See `docs/algorithm-notes.md`.
     pub end_displacement_weight: f64,
+    /// The displacement estimate of a hidden node: `slide_ends` (default:
+    /// a run that reaches an end of the rope slides along its previous
+    /// curve with the rope and moves across it with its anchor; middle
+    /// runs use Eq. 6-7), `paper` (Eq. 6-7 everywhere) or `slide` (every run).
+    pub hidden_motion: HiddenMotion,
     /// Weight of the uniform outlier component (`w`, Eq. 3). Default 0.1.
     pub outlier_weight: f64,
     /// EM stops when no node moves more than this in an iteration, metres. Default 0.1 mm.
@@ -58,6 +64,7 @@ impl Default for UpeTrackParams {
             bending_resistance: 0.8,
             displacement_weight: 0.75,
             end_displacement_weight: 1.0,
+            hidden_motion: HiddenMotion::SlideEnds,
             outlier_weight: 0.1,
             em_tolerance: 1e-4,
             em_max_iterations: 10,
@@ -109,6 +116,7 @@ impl UpeTrackParams {
             bending_resistance: self.bending_resistance,
             displacement_weight: self.displacement_weight,
             end_displacement_weight: self.end_displacement_weight,
+            hidden_motion: self.hidden_motion,
         }
     }
 

@@ -9,6 +9,7 @@
 
 use alloc::vec::Vec;
 
+use super::slide::slide_estimates;
 use crate::math::{self, Vec3};
 
 /// The UPE coefficients (paper symbols in brackets).
@@ -27,6 +28,26 @@ pub struct UpeCoefficients {
     /// the geometric term (this project's
     /// decision; `displacement_weight` gives the paper's rule).
     pub end_displacement_weight: f64,
+    /// Where the displacement estimate `y'` comes from.
+    pub hidden_motion: HiddenMotion,
+}
+
+/// The displacement estimate `y'` of a hidden node (Eq. 11's first term).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
+pub enum HiddenMotion {
+    /// Eq. 6-7 for every run: the previous position moved by the decayed
+    /// mean of the displacements of the three nearest known nodes.
+    Paper,
+    /// Runs that reach an end of the rope slide along their previous curve
+    /// with the rope and move across it with their anchor
+    /// ([`super::slide`]); runs in the middle keep Eq. 6-7. This project's
+    /// default (see `docs/algorithm-notes.md` for why not every run).
+    #[default]
+    SlideEnds,
+    /// Every run slides ([`super::slide`]), the middle ones between both anchors.
+    Slide,
 }
 
 /// How the hidden nodes of one frame were placed.
@@ -50,15 +71,29 @@ pub struct UpeReport {
 /// - Eq. 11: `y = alpha y' + (1 - alpha) y''`.
 pub fn estimate_node(
     m: usize,
-    [n1, n2, n3]: [usize; 3],
+    n: [usize; 3],
     now: &[Vec3],
     prev: &[Vec3],
     c: &UpeCoefficients,
 ) -> Vec3 {
+    estimate_node_with(m, n, now, prev, c, None)
+}
+
+/// [`estimate_node`] with the displacement estimate `y'` given (`Some`)
+/// instead of Eq. 6-7's.
+fn estimate_node_with(
+    m: usize,
+    [n1, n2, n3]: [usize; 3],
+    now: &[Vec3],
+    prev: &[Vec3],
+    c: &UpeCoefficients,
+    displacement_estimate: Option<Vec3>,
+) -> Vec3 {
     let g = c.displacement_decay;
     let disp = |k: usize| now[k] - prev[k];
-    let displacement = (disp(n1) + disp(n2) * g + disp(n3) * (g * g)) / (1.0 + g + g * g);
-    let y_disp = prev[m] + displacement;
+    let y_disp = displacement_estimate.unwrap_or_else(|| {
+        prev[m] + (disp(n1) + disp(n2) * g + disp(n3) * (g * g)) / (1.0 + g + g * g)
+    });
 
     let d = math::norm(&(prev[m] - prev[n1]));
     let dir = now[n1] - now[n2];
@@ -106,6 +141,7 @@ fn sweep(
     prev: &[Vec3],
     c: &UpeCoefficients,
     forward: bool,
+    slid: &[Option<Vec3>],
 ) -> Vec<Option<Vec3>> {
     let at_end = hidden_end_runs(known);
     let end_c = UpeCoefficients {
@@ -133,7 +169,7 @@ fn sweep(
         };
         if known_now[n1] && known_now[n2] && known_now[n3] {
             let coefficients = if at_end[m] { &end_c } else { c };
-            let y = estimate_node(m, [n1, n2, n3], &now, prev, coefficients);
+            let y = estimate_node_with(m, [n1, n2, n3], &now, prev, coefficients, slid[m]);
             if math::is_finite(&y) {
                 now[m] = y;
                 known_now[m] = true;
@@ -179,8 +215,25 @@ pub fn estimate_hidden(
     if nodes.len() != known.len() || nodes.len() != prev.len() || known.iter().all(|&k| k) {
         return report;
     }
-    let fwd = sweep(nodes, known, prev, c, true);
-    let bwd = sweep(nodes, known, prev, c, false);
+    let slid = match c.hidden_motion {
+        HiddenMotion::Paper => alloc::vec![None; nodes.len()],
+        HiddenMotion::Slide => slide_estimates(nodes, known, prev, c.displacement_decay),
+        HiddenMotion::SlideEnds => {
+            let n = nodes.len();
+            let mut est = slide_estimates(nodes, known, prev, c.displacement_decay);
+            // Keep only the runs that reach an end of the rope.
+            let head = known.iter().take_while(|&&k| !k).count();
+            let tail = known.iter().rev().take_while(|&&k| !k).count();
+            for (m, e) in est.iter_mut().enumerate() {
+                if m >= head && m + tail < n {
+                    *e = None;
+                }
+            }
+            est
+        }
+    };
+    let fwd = sweep(nodes, known, prev, c, true, &slid);
+    let bwd = sweep(nodes, known, prev, c, false, &slid);
     let snapshot = nodes.to_vec();
     for m in 0..nodes.len() {
         if known[m] {
@@ -191,7 +244,10 @@ pub fn estimate_hidden(
             (Some(a), None) | (None, Some(a)) => a,
             (None, None) => {
                 report.fallback += 1;
-                fallback_estimate(m, &snapshot, known, prev, c.displacement_decay)
+                match slid[m] {
+                    Some(y) => y,
+                    None => fallback_estimate(m, &snapshot, known, prev, c.displacement_decay),
+                }
             }
         };
         if !matches!((fwd[m], bwd[m]), (None, None)) {
@@ -213,6 +269,7 @@ mod tests {
         bending_resistance: 0.8,
         displacement_weight: 0.75,
         end_displacement_weight: 0.75,
+        hidden_motion: HiddenMotion::Paper,
     };
 
     #[test]
@@ -260,6 +317,7 @@ mod tests {
             curvature_retention: 1.0,
             bending_resistance: 1.0,
             displacement_decay: 0.8,
+            hidden_motion: HiddenMotion::Paper,
         };
         let prev = vec![
             Vec3::new(-1.0, 0.0, 0.0),
@@ -475,6 +533,11 @@ mod tests {
                 bending_resistance: rng.uniform(),
                 displacement_weight: rng.uniform(),
                 end_displacement_weight: rng.uniform(),
+                hidden_motion: [
+                    HiddenMotion::Paper,
+                    HiddenMotion::SlideEnds,
+                    HiddenMotion::Slide,
+                ][case % 3],
             };
             estimate_hidden(&mut nodes, &known, &prev, &c);
             assert!(nodes.iter().all(math::is_finite), "case {case}");

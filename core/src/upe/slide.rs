@@ -1,0 +1,290 @@
+//! The displacement of a hidden run as the rope carries it (this project's
+//! estimate in place of Eq. 6-7, `HiddenMotion::Slide`): a rope dragged
+//! along itself slides along its own path, so the part of an anchor's
+//! displacement along the rope moves the hidden nodes *along the run's
+//! previous curve*, and only the part across the rope translates them.
+//!
+//! A rope at rest stays where it was last seen (no displacement, no
+//! motion), the hidden run keeps its arc length (nodes move along a curve
+//! of fixed length; past a free end the curve is continued straight along
+//! its last tangent), and a sideways push translates the run as Eq. 6-7 do.
+
+use alloc::vec::Vec;
+
+use crate::math::{self, Vec3};
+
+/// A maximal run of hidden nodes `start..end` (end exclusive).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct HiddenRun {
+    /// First hidden node.
+    pub start: usize,
+    /// One past the last hidden node.
+    pub end: usize,
+}
+
+/// The maximal runs of `false` in `known`.
+pub fn hidden_runs(known: &[bool]) -> Vec<HiddenRun> {
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < known.len() {
+        if known[i] {
+            i += 1;
+            continue;
+        }
+        let start = i;
+        while i < known.len() && !known[i] {
+            i += 1;
+        }
+        out.push(HiddenRun { start, end: i });
+    }
+    out
+}
+
+/// Nodes of visible rope behind an anchor that the sliding curve may
+/// borrow when a run is pulled out past its anchor.
+const BORROWED_NODES: usize = 3;
+
+/// A polyline with its arc coordinates, evaluated at any arc length; past
+/// its ends it continues straight along its end segments.
+struct Curve {
+    points: Vec<Vec3>,
+    s: Vec<f64>,
+}
+
+impl Curve {
+    fn new(points: Vec<Vec3>) -> Self {
+        let mut s = Vec::with_capacity(points.len());
+        let mut total = 0.0;
+        for (i, p) in points.iter().enumerate() {
+            if i > 0 {
+                total += math::norm(&(p - points[i - 1]));
+            }
+            s.push(total);
+        }
+        Self { points, s }
+    }
+
+    /// The arc coordinate of the point of the curve nearest `p`, among the
+    /// segments within `reach` of arc length from `near`.
+    fn project(&self, p: &Vec3, near: f64, reach: f64) -> f64 {
+        let mut best = (f64::INFINITY, near);
+        for k in 0..self.points.len().saturating_sub(1) {
+            if self.s[k] > near + reach || self.s[k + 1] < near - reach {
+                continue;
+            }
+            let (a, b) = (self.points[k], self.points[k + 1]);
+            let ab = b - a;
+            let len2 = ab.norm_squared();
+            let t = if len2 > 0.0 {
+                ((p - a).dot(&ab) / len2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let d = (p - (a + ab * t)).norm_squared();
+            if d < best.0 {
+                best = (d, self.s[k] + t * (self.s[k + 1] - self.s[k]));
+            }
+        }
+        best.1
+    }
+
+    fn at(&self, sigma: f64) -> Vec3 {
+        let n = self.points.len();
+        if n == 1 {
+            return self.points[0];
+        }
+        // The segment holding sigma, the end ones extended to infinity.
+        let k = match self.s.iter().position(|&x| x > sigma) {
+            Some(0) => 0,
+            Some(k) => (k - 1).min(n - 2),
+            None => n - 2,
+        };
+        let (a, b) = (self.points[k], self.points[k + 1]);
+        let len = self.s[k + 1] - self.s[k];
+        if !(len > math::LENGTH_EPSILON) {
+            return a;
+        }
+        a + (b - a) * ((sigma - self.s[k]) / len)
+    }
+}
+
+/// How one anchor moved: the slide along the previous curve (its new
+/// position projected onto the curve, in the direction of increasing node
+/// index) and what is left across the curve. Exact for a rope sliding along
+/// itself, curved or not.
+struct AnchorMotion {
+    slide: f64,
+    across: Vec3,
+}
+
+fn anchor_motion(curve: &Curve, sigma: f64, moved_to: &Vec3) -> AnchorMotion {
+    // Along the curve, no farther than the anchor's own displacement allows.
+    let reach = math::norm(&(moved_to - curve.at(sigma))) + math::LENGTH_EPSILON;
+    let s_new = curve.project(moved_to, sigma, reach);
+    AnchorMotion {
+        slide: s_new - sigma,
+        across: moved_to - curve.at(s_new),
+    }
+}
+
+/// The estimate of every hidden node (`None` for known nodes) by sliding
+/// each hidden run along its previous curve. `now` holds this frame's
+/// positions of the known nodes, `prev` the previous frame's nodes. The
+/// motion across the rope fades along the run by `decay` (Eq. 6's
+/// `gamma`) per node from its anchor, as friction on the table makes it:
+/// the far part of a long hidden run stays where it lay.
+pub fn slide_estimates(
+    now: &[Vec3],
+    known: &[bool],
+    prev: &[Vec3],
+    decay: f64,
+) -> Vec<Option<Vec3>> {
+    let m = now.len();
+    let mut out = alloc::vec![None; m];
+    if known.len() != m || prev.len() != m {
+        return out;
+    }
+    for run in hidden_runs(known) {
+        let left = run.start.checked_sub(1);
+        let right = (run.end < m).then_some(run.end);
+        if left.is_none() && right.is_none() {
+            continue;
+        }
+        // The previous curve through the run and its anchors, with a few
+        // visible nodes borrowed behind a lone anchor (a run pulled out
+        // past it follows the rope's previous path there).
+        let from = match (left, right) {
+            (Some(a), None) => a.saturating_sub(BORROWED_NODES),
+            (Some(a), Some(_)) => a,
+            (None, _) => 0,
+        };
+        let to = match (left, right) {
+            (None, Some(b)) => (b + BORROWED_NODES).min(m - 1),
+            (_, Some(b)) => b,
+            (_, None) => m - 1,
+        };
+        let curve = Curve::new(prev[from..=to].to_vec());
+        let sigma = |i: usize| curve.s[i - from];
+        let ma = left.map(|a| anchor_motion(&curve, sigma(a), &now[a]));
+        let mb = right.map(|b| anchor_motion(&curve, sigma(b), &now[b]));
+        let slide = match (&ma, &mb) {
+            (Some(a), Some(b)) => 0.5 * (a.slide + b.slide),
+            (Some(a), None) => a.slide,
+            (None, Some(b)) => b.slide,
+            (None, None) => 0.0,
+        };
+        for i in run.start..run.end {
+            let across = match (left, right, &ma, &mb) {
+                (Some(a), Some(b), Some(ma), Some(mb)) => {
+                    let span = sigma(b) - sigma(a);
+                    let lambda = if span > math::LENGTH_EPSILON {
+                        (sigma(i) - sigma(a)) / span
+                    } else {
+                        0.5
+                    };
+                    ma.across * (1.0 - lambda) + mb.across * lambda
+                }
+                (Some(a), _, Some(ma), None) => ma.across * libm::pow(decay, (i - a - 1) as f64),
+                (_, Some(b), None, Some(mb)) => mb.across * libm::pow(decay, (b - i - 1) as f64),
+                _ => Vec3::zeros(),
+            };
+            let y = curve.at(sigma(i) + slide) + across;
+            if math::is_finite(&y) {
+                out[i] = Some(y);
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use alloc::vec;
+
+    /// An arc of radius 0.1 m, nodes 2 cm apart along it.
+    fn arc(n: usize, shift: f64) -> Vec<Vec3> {
+        (0..n)
+            .map(|i| {
+                let t = (i as f64 * 0.02 + shift) / 0.1;
+                Vec3::new(0.1 * libm::cos(t), 0.1 * libm::sin(t), 0.6)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn runs_are_found_in_order() {
+        let known = [false, true, false, false, true, false];
+        assert_eq!(
+            hidden_runs(&known),
+            vec![
+                HiddenRun { start: 0, end: 1 },
+                HiddenRun { start: 2, end: 4 },
+                HiddenRun { start: 5, end: 6 }
+            ]
+        );
+        assert!(hidden_runs(&[true; 3]).is_empty());
+    }
+
+    #[test]
+    fn a_rope_at_rest_stays_where_it_was_seen() {
+        let prev = arc(12, 0.0);
+        let known: Vec<bool> = (0..12).map(|i| !(i < 3 || (6..8).contains(&i))).collect();
+        let est = slide_estimates(&prev, &known, &prev, 0.8);
+        for i in 0..12 {
+            match est[i] {
+                Some(y) => assert!((y - prev[i]).norm() < 1e-12, "node {i}"),
+                None => assert!(known[i]),
+            }
+        }
+    }
+
+    #[test]
+    fn a_rope_dragged_along_itself_moves_its_hidden_tip_along_its_path() {
+        // The whole rope slides 1 cm along its own arc (towards lower index):
+        // the visible nodes show it, and the hidden tip (nodes 8-11) must
+        // land on the arc 1 cm further along, not 1 cm translated.
+        let prev = arc(12, 0.0);
+        let now = arc(12, -0.01);
+        let known: Vec<bool> = (0..12).map(|i| i < 8).collect();
+        let est = slide_estimates(&now, &known, &prev, 0.8);
+        for i in 8..12 {
+            let y = est[i].expect("estimated");
+            // Within the chords' sagitta (2 cm chords of a 10 cm arc: 0.5 mm).
+            assert!(
+                (y - now[i]).norm() < 6e-4,
+                "node {i}: {}",
+                (y - now[i]).norm()
+            );
+            // A plain translation by the anchor's displacement errs more.
+            let translated = prev[i] + (now[7] - prev[7]);
+            assert!((translated - now[i]).norm() > 1e-3);
+        }
+        // The run keeps its length.
+        let len = |p: &[Vec3]| p.windows(2).map(|w| (w[1] - w[0]).norm()).sum::<f64>();
+        let mut nodes = now.clone();
+        for i in 8..12 {
+            nodes[i] = est[i].expect("estimated");
+        }
+        assert!((len(&nodes[7..]) - len(&prev[7..])).abs() < 1e-3);
+    }
+
+    #[test]
+    fn a_sideways_push_translates_and_a_middle_run_blends_its_anchors() {
+        let prev: Vec<Vec3> = (0..10)
+            .map(|i| Vec3::new(i as f64 * 0.02, 0.0, 0.6))
+            .collect();
+        let known: Vec<bool> = (0..10).map(|i| !(4..7).contains(&i)).collect();
+        // Left part pushed 1 cm in y, right part not at all.
+        let mut now = prev.clone();
+        for p in now.iter_mut().take(4) {
+            p.y += 0.01;
+        }
+        let est = slide_estimates(&now, &known, &prev, 0.8);
+        let y: Vec<f64> = (4..7).map(|i| est[i].expect("estimated").y).collect();
+        // Anchors at nodes 3 (pushed) and 7 (still): 3/4, 2/4, 1/4 of the push.
+        for (k, expect) in [0.0075, 0.005, 0.0025].iter().enumerate() {
+            assert!((y[k] - expect).abs() < 1e-12, "node {}: {}", k + 4, y[k]);
+        }
+    }
+}
