@@ -29,7 +29,11 @@ fn main() {
         let vox = voxel_downsample(&raw, params.voxel_size);
         let t3 = Instant::now();
         let cloud = build_cloud(&frame, &mask, &cam, &params.cloud());
-        let obs = upetrack::tracker::Observation { mask, cloud };
+        let obs = upetrack::tracker::Observation {
+            mask,
+            cloud,
+            occlusions: Vec::new(),
+        };
         let t4 = Instant::now();
         let out = tracker.update(&frame, &obs);
         if let Some(em) = out.em {

@@ -100,6 +100,12 @@ fn load_params(path: Option<&str>) -> Result<Params, CliError> {
     let Some(path) = path else {
         return Ok(Params::default());
     };
+    // A preset name (`paper`, `default`) unless a file of that name exists.
+    if !Path::new(path).exists() {
+        if let Some(p) = Params::preset(path) {
+            return Ok(p);
+        }
+    }
     let text = std::fs::read_to_string(path).map_err(|e| CliError(format!("{path}: {e}")))?;
     Ok(upetrack_io::params_file::parse_params(&text, path)?)
 }

@@ -490,19 +490,19 @@ fn compare_writes_both_tables_into_a_page_between_its_markers() {
 
 /// Regression for "a hidden tip straightens" (TrackDLO's protocol, 30 % of
 /// the rope hidden from one end while the other end is pulled): with the
-/// displacement term alone at the ends (default), the hidden tip moves with
-/// the rope; with the paper's alpha there too, it straightens out of the
-/// occluder.
+/// defaults (the hidden tip slides along its curve with the rope) it stays
+/// on the rope; with the paper's rules it straightens out of the occluder.
 #[test]
 fn a_hidden_tip_moves_with_the_pulled_rope_instead_of_straightening() {
     let kind = ScenarioKind::OcclusionSweep { percent: 30 };
     let ours = mean(&track_scenario(kind, 60, Params::default()).1);
-    let mut paper = Params::default();
-    paper.upetrack.end_displacement_weight = paper.upetrack.displacement_weight;
-    let papers = mean(&track_scenario(kind, 60, paper).1);
-    eprintln!("sweep-30: occluded mean {ours:.2} mm (ends: displacement alone), {papers:.2} mm (paper's alpha)");
-    assert!(ours < 10.0, "occluded mean {ours:.2} mm");
-    assert!(ours < 0.7 * papers, "{ours:.2} vs {papers:.2}");
+    let papers = mean(&track_scenario(kind, 60, Params::paper()).1);
+    eprintln!(
+        "sweep-30: occluded mean {ours:.2} mm (defaults), {papers:.2} mm (the paper's rules)"
+    );
+    // docs/testing.md: 3.74 mm with the defaults on these 60 frames.
+    assert!(ours < 5.0, "occluded mean {ours:.2} mm");
+    assert!(ours < 0.5 * papers, "{ours:.2} vs {papers:.2}");
 }
 
 /// The image of `f` moved right by `dx` pixels (the rope jumped).

@@ -102,6 +102,30 @@ impl Default for Params {
 }
 
 impl Params {
+    /// The paper's tracking rules exactly (`--params paper`): visibility by
+    /// `q >= V_lim` alone, Eq. 6-11 with `alpha = 0.75` for every hidden
+    /// run (ends too), and nothing of this project's additions to the
+    /// tracking step. The shared pipeline (segmentation, cloud, radius,
+    /// initialisation) is the same as the defaults'.
+    pub fn paper() -> Self {
+        let mut p = Self::default();
+        p.visibility_min_fraction = 0.0;
+        p.upetrack.end_displacement_weight = p.upetrack.displacement_weight;
+        p.upetrack.hidden_motion = crate::upe::occlusion::HiddenMotion::Paper;
+        p.upetrack.free_space = false;
+        p.upetrack.conserve_length = false;
+        p
+    }
+
+    /// A named preset: `default` or `paper`.
+    pub fn preset(name: &str) -> Option<Self> {
+        match name {
+            "default" => Some(Self::default()),
+            "paper" => Some(Self::paper()),
+            _ => None,
+        }
+    }
+
     /// Checks every field against its documented range.
     pub fn validate(&self) -> Result<(), ParamsError> {
         let m = self.node_count;

@@ -11,6 +11,7 @@ use alloc::vec::Vec;
 
 use crate::math::Vec3;
 use crate::perception::camera::CameraIntrinsics;
+use crate::perception::evidence::Evidence;
 
 /// The tracking algorithms.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -57,6 +58,11 @@ pub struct StepInput<'a> {
     pub visible: &'a [bool],
     /// The camera.
     pub camera: &'a CameraIntrinsics,
+    /// This frame's images (depth, mask, rectangles), for an algorithm that
+    /// checks where hidden nodes may be; `None` when not available.
+    pub evidence: Option<Evidence<'a>>,
+    /// The rope's length at initialisation, metres, when known.
+    pub rest_length: Option<f64>,
 }
 
 /// What a step produced.

@@ -38,6 +38,8 @@ fuzz_target!(|data: &[u8]| {
             cloud,
             visible: &visible,
             camera: &camera,
+            evidence: None,
+            rest_length: None,
         },
         &params,
     );

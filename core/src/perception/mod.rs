@@ -2,10 +2,12 @@
 //! [`camera`] and [`frame`] (intrinsics, deprojection, the input images),
 //! [`segmentation`] (HSV thresholds after the occlusion rectangles),
 //! [`point_cloud`] (masked pixels with depth, voxel grid, pushed to the
-//! rope's axis) and [`initialisation`] (the ordered centre line and `M`
-//! nodes when there is no state).
+//! rope's axis), [`initialisation`] (the ordered centre line and `M`
+//! nodes when there is no state), and [`evidence`] (what the images say
+//! about a point: hidden by something, or in free space).
 
 pub mod camera;
+pub mod evidence;
 pub mod frame;
 pub mod initialisation;
 pub mod point_cloud;

@@ -9,6 +9,7 @@ use crate::baselines::trackdlo::TrackDloReport;
 use crate::math::Vec3;
 use crate::params::{Params, ParamsError};
 use crate::perception::camera::{CameraError, CameraIntrinsics};
+use crate::perception::evidence::Evidence;
 use crate::perception::frame::{Frame, FrameError};
 use crate::perception::initialisation::{initialise, InitError};
 use crate::perception::point_cloud::build_cloud;
@@ -104,6 +105,8 @@ pub struct Observation {
     pub mask: Mask,
     /// The downsampled cloud on the rope's centre line, metres.
     pub cloud: Vec<Vec3>,
+    /// The occlusion rectangles blacked out in this frame.
+    pub occlusions: Vec<Rect>,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -122,6 +125,8 @@ pub struct TrackerSnapshot {
     known_length: Option<f64>,
     #[cfg_attr(feature = "serde", serde(default))]
     known_radius: Option<f64>,
+    #[cfg_attr(feature = "serde", serde(default))]
+    rest_length: Option<f64>,
     stepper: Stepper,
 }
 
@@ -136,6 +141,9 @@ pub struct Tracker {
     known_length: Option<f64>,
     /// Radius measured at the first initialisation, metres.
     known_radius: Option<f64>,
+    /// Length of the node polyline at the first initialisation, metres
+    /// (chords, as the tracked nodes measure it).
+    rest_length: Option<f64>,
     /// The per-frame step of `params.algorithm`.
     stepper: Stepper,
 }
@@ -157,6 +165,7 @@ impl Tracker {
             state: None,
             known_length: None,
             known_radius: None,
+            rest_length: None,
             stepper: Stepper::new(params.algorithm),
         })
     }
@@ -215,6 +224,7 @@ impl Tracker {
             state: self.state.clone(),
             known_length: self.known_length,
             known_radius: self.known_radius,
+            rest_length: self.rest_length,
             stepper: self.stepper.clone(),
         }
     }
@@ -233,6 +243,7 @@ impl Tracker {
         });
         self.known_length = snapshot.known_length;
         self.known_radius = snapshot.known_radius;
+        self.rest_length = snapshot.rest_length;
         self.stepper = snapshot.stepper;
         if restart {
             self.stepper = Stepper::new(self.params.algorithm);
@@ -246,6 +257,7 @@ impl Tracker {
         self.state = None;
         self.known_length = None;
         self.known_radius = None;
+        self.rest_length = None;
         self.stepper = Stepper::new(self.params.algorithm);
     }
 
@@ -258,7 +270,11 @@ impl Tracker {
         frame.check_camera(&self.camera)?;
         let mask = segment(frame, &self.hsv, occlusions);
         let cloud = build_cloud(frame, &mask, &self.camera, &self.cloud_settings());
-        Ok(Observation { mask, cloud })
+        Ok(Observation {
+            mask,
+            cloud,
+            occlusions: occlusions.to_vec(),
+        })
     }
 
     /// The rope's radius in force, metres: measured at the first
@@ -310,6 +326,14 @@ impl Tracker {
                 cloud: &obs.cloud,
                 visible: &visible,
                 camera: &self.camera,
+                evidence: Some(Evidence {
+                    frame,
+                    mask: &obs.mask,
+                    occlusions: &obs.occlusions,
+                    camera: &self.camera,
+                    radius: self.radius(),
+                }),
+                rest_length: self.rest_length,
             },
             &self.params,
         );
@@ -354,6 +378,7 @@ impl Tracker {
         } else {
             self.known_length = Some(init.length);
             self.known_radius = init.radius;
+            self.rest_length = Some(polyline_length(&init.nodes));
         }
         let p = &self.params;
         let visible = visible_nodes_relative(

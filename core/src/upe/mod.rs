@@ -4,12 +4,16 @@
 //! nodes, Eq. 6-11) and [`resampling`] (Eq. 12-15). [`UpeTrackParams`] holds
 //! the step's parameters; [`UpeTrackStep`] runs the stages.
 
+pub mod free_space;
+pub mod length;
 pub mod occlusion;
 pub mod registration;
 pub mod resampling;
 pub mod slide;
 pub mod visibility;
 
+use free_space::{clear_free_space, FreeSpaceReport};
+use length::{conserve_end_lengths, LengthReport};
 use occlusion::{estimate_hidden, HiddenMotion, UpeCoefficients, UpeReport};
 use registration::{register, EmReport, EmSettings, MAX_EM_ITERATIONS};
 use resampling::resample_uniform;
@@ -44,6 +48,13 @@ pub struct UpeTrackParams {
     /// curve with the rope and moves across it with its anchor; middle
     /// runs use Eq. 6-7), `paper` (Eq. 6-7 everywhere) or `slide` (every run).
     pub hidden_motion: HiddenMotion,
+    /// Give a hidden run at an end of the rope the arc length the rest of
+    /// the rope leaves of its known length (no stretching, no shrinking).
+    /// Default true.
+    pub conserve_length: bool,
+    /// Move hidden runs out of free space: where the images show nothing
+    /// that could hide them (`perception::evidence`). Default true.
+    pub free_space: bool,
     /// Weight of the uniform outlier component (`w`, Eq. 3). Default 0.1.
     pub outlier_weight: f64,
     /// EM stops when no node moves more than this in an iteration, metres. Default 0.1 mm.
@@ -65,6 +76,8 @@ impl Default for UpeTrackParams {
             displacement_weight: 0.75,
             end_displacement_weight: 1.0,
             hidden_motion: HiddenMotion::SlideEnds,
+            conserve_length: true,
+            free_space: true,
             outlier_weight: 0.1,
             em_tolerance: 1e-4,
             em_max_iterations: 10,
@@ -138,6 +151,10 @@ pub struct UpeTrackReport {
     pub em: EmReport,
     /// How the hidden nodes were placed.
     pub upe: UpeReport,
+    /// What length conservation did to hidden ends.
+    pub length: LengthReport,
+    /// What the free-space check moved.
+    pub free_space: FreeSpaceReport,
 }
 
 /// UPETrack's step: GMM-EM of the visible nodes, UPE of the hidden ones,
@@ -160,10 +177,23 @@ impl TrackingStep for UpeTrackStep {
         let mut nodes = input.previous.to_vec();
         let em = register(input.cloud, &mut nodes, input.visible, &settings.em());
         let upe = estimate_hidden(&mut nodes, input.visible, input.previous, &settings.upe());
+        let length = match (input.rest_length, settings.conserve_length) {
+            (Some(l), true) => conserve_end_lengths(&mut nodes, input.visible, l),
+            _ => LengthReport::default(),
+        };
+        let free_space = match (&input.evidence, settings.free_space) {
+            (Some(e), true) => clear_free_space(&mut nodes, input.visible, e),
+            _ => FreeSpaceReport::default(),
+        };
         StepOutput {
             nodes: resample_uniform(&nodes, input.previous.len()),
             visible: input.visible.to_vec(),
-            report: UpeTrackReport { em, upe },
+            report: UpeTrackReport {
+                em,
+                upe,
+                length,
+                free_space,
+            },
         }
     }
 }

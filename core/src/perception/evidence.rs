@@ -1,0 +1,174 @@
+//! What this frame's images say about a point in space: whether a rope
+//! could be there unseen. A hidden node is plausible only where something
+//! hides it (a surface nearer the camera in the depth image, a declared
+//! occlusion rectangle), outside the image, where the depth camera has no
+//! measurement, or on rope-coloured pixels; a node whose pixels show a
+//! surface at or behind it with no rope colour is in free space.
+
+use super::camera::CameraIntrinsics;
+use super::frame::Frame;
+use super::segmentation::{Mask, Rect};
+use crate::math::Vec3;
+
+/// A surface this much nearer the camera than a point hides it, metres:
+/// well above the depth noise at a metre (about 3 mm) and below the gap
+/// between a rope and a hand or box held just above it.
+pub const OCCLUDER_MARGIN: f64 = 0.01;
+
+/// Half-width of the window of pixels looked at around a point's
+/// projection, as a multiple of the rope's radius in pixels (the window
+/// covers the rope's width, so a node near an occluder's edge is not
+/// judged by a single pixel beside it).
+pub const WINDOW_RADII: f64 = 1.5;
+
+/// Smallest half-width of that window, pixels.
+pub const MIN_WINDOW_PX: i64 = 2;
+
+/// Largest half-width of that window, pixels (caps the cost per point).
+pub const MAX_WINDOW_PX: i64 = 12;
+
+/// What the images say about a point.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Sight {
+    /// Behind the camera or projecting outside the image.
+    OutOfView,
+    /// Rope-coloured pixels around its projection.
+    Rope,
+    /// Inside a declared occlusion rectangle.
+    Covered,
+    /// A surface clearly nearer the camera than the point.
+    Occluded,
+    /// No depth measurement around its projection.
+    Unknown,
+    /// Its pixels show a surface at or behind it and no rope: nothing hides
+    /// it, so a hidden rope cannot be there.
+    FreeSpace,
+}
+
+impl Sight {
+    /// `true` when a hidden node may be there.
+    pub fn allows_hidden(self) -> bool {
+        self != Sight::FreeSpace
+    }
+}
+
+/// The evidence of one frame: its depth, the rope mask and the declared
+/// occlusion rectangles.
+#[derive(Debug, Clone, Copy)]
+pub struct Evidence<'a> {
+    /// The frame (depth in its units).
+    pub frame: &'a Frame<'a>,
+    /// The rope mask (after the rectangles were blacked out).
+    pub mask: &'a Mask,
+    /// The declared occlusion rectangles of this frame.
+    pub occlusions: &'a [Rect],
+    /// The camera.
+    pub camera: &'a CameraIntrinsics,
+    /// The rope's radius, metres (sizes the window).
+    pub radius: f64,
+}
+
+impl Evidence<'_> {
+    /// What the images say about `p` (camera frame, metres).
+    pub fn sight(&self, p: &Vec3) -> Sight {
+        let Some(q) = self.camera.project(p) else {
+            return Sight::OutOfView;
+        };
+        let (u, v) = (libm::round(q.x) as i64, libm::round(q.y) as i64);
+        let (w, h) = (self.frame.width as i64, self.frame.height as i64);
+        if u < 0 || v < 0 || u >= w || v >= h {
+            return Sight::OutOfView;
+        }
+        if self.occlusions.iter().any(|r| r.contains(u, v)) {
+            return Sight::Covered;
+        }
+        let focal = 0.5 * (self.camera.fx + self.camera.fy);
+        let half = (libm::ceil(WINDOW_RADII * self.radius * focal / p.z) as i64)
+            .clamp(MIN_WINDOW_PX, MAX_WINDOW_PX);
+        let mut any_depth = false;
+        for y in (v - half).max(0)..=(v + half).min(h - 1) {
+            for x in (u - half).max(0)..=(u + half).min(w - 1) {
+                if self.mask.get(x, y) {
+                    return Sight::Rope;
+                }
+                let raw = self.frame.depth[(y * w + x) as usize];
+                if raw == 0 {
+                    continue;
+                }
+                any_depth = true;
+                if (raw as f64) * self.frame.depth_scale < p.z - OCCLUDER_MARGIN {
+                    return Sight::Occluded;
+                }
+            }
+        }
+        if any_depth {
+            Sight::FreeSpace
+        } else {
+            Sight::Unknown
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use alloc::vec;
+
+    #[test]
+    fn a_point_is_judged_by_what_its_pixels_show() {
+        let camera = CameraIntrinsics {
+            width: 40,
+            height: 40,
+            fx: 40.0,
+            fy: 40.0,
+            cx: 20.0,
+            cy: 20.0,
+        };
+        // A table at 0.6 m; a box at 0.5 m over columns 30..40; no depth in
+        // rows 0..5; rope pixels at column 5.
+        let rgb = vec![0u8; 40 * 40 * 3];
+        let mut depth = vec![600u16; 40 * 40];
+        for y in 0..40 {
+            for x in 30..40 {
+                depth[y * 40 + x] = 500;
+            }
+        }
+        for x in 0..40 {
+            for y in 0..5 {
+                depth[y * 40 + x] = 0;
+            }
+        }
+        let frame = Frame::new(40, 40, &rgb, &depth, 0.001).expect("frame");
+        let mut mask = Mask::new(40, 40);
+        for y in 0..40 {
+            mask.data[y * 40 + 5] = true;
+        }
+        let rect = [Rect {
+            x: 15,
+            y: 30,
+            w: 5,
+            h: 5,
+        }];
+        let e = Evidence {
+            frame: &frame,
+            mask: &mask,
+            occlusions: &rect,
+            camera: &camera,
+            radius: 0.0075,
+        };
+        // A pixel at (u, v) for a point 0.59 m away, just above the table.
+        let at =
+            |u: f64, v: f64| Vec3::new((u - 20.0) * 0.59 / 40.0, (v - 20.0) * 0.59 / 40.0, 0.59);
+        assert_eq!(e.sight(&at(20.0, 20.0)), Sight::FreeSpace);
+        assert!(!e.sight(&at(20.0, 20.0)).allows_hidden());
+        assert_eq!(e.sight(&at(35.0, 20.0)), Sight::Occluded);
+        assert_eq!(e.sight(&at(6.0, 20.0)), Sight::Rope);
+        assert_eq!(e.sight(&at(17.0, 32.0)), Sight::Covered);
+        assert_eq!(e.sight(&at(20.0, 1.0)), Sight::Unknown);
+        assert_eq!(e.sight(&at(60.0, 20.0)), Sight::OutOfView);
+        assert_eq!(e.sight(&Vec3::new(0.0, 0.0, -1.0)), Sight::OutOfView);
+        // Below the table (behind it): the table is nearer, so it hides the point.
+        let below = Vec3::new(0.0, 0.0, 0.62);
+        assert_eq!(e.sight(&below), Sight::Occluded);
+    }
+}

@@ -1,0 +1,261 @@
+//! Hidden nodes out of free space (this project's addition after Eq. 11):
+//! a hidden run whose estimate puts nodes where the images show nothing
+//! hiding them (`Sight::FreeSpace`) is moved back to where something can.
+//!
+//! - A run at an end of the rope turns about its anchor (the last visible
+//!   node), about the camera's optical axis, by the smallest angle that
+//!   clears free space: its shape, length and depths stay, only its
+//!   heading in the image changes, the way a hidden tip swings under the
+//!   object that hides it. (About the ray through the anchor instead, an
+//!   off-centre run would tilt in depth and could sink into the table,
+//!   where the table in front of it would count as an occluder.)
+//! - A run in the middle is drawn towards the straight chord between its
+//!   anchors, by the smallest share that clears free space.
+//!
+//! Where nothing clears every node, the choice with the fewest nodes in
+//! free space is kept (ties: the smallest change).
+
+use alloc::vec::Vec;
+
+use super::slide::{hidden_runs, HiddenRun};
+use crate::math::{self, Vec3};
+use crate::perception::evidence::Evidence;
+
+/// Turning angles tried for an end run, radians: 5 degree steps to half a turn.
+const TURN_STEP: f64 = 5.0 * core::f64::consts::PI / 180.0;
+/// Number of turning steps each way.
+const TURN_STEPS: usize = 36;
+/// Shares of the way to the chord tried for a middle run.
+const CHORD_SHARES: [f64; 4] = [0.25, 0.5, 0.75, 1.0];
+
+/// What the stage did in one frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct FreeSpaceReport {
+    /// Hidden nodes found in free space before the correction.
+    pub found: usize,
+    /// Hidden nodes still in free space after it.
+    pub left: usize,
+    /// Runs moved.
+    pub runs_moved: usize,
+}
+
+fn in_free_space(evidence: &Evidence<'_>, points: &[Vec3]) -> usize {
+    points
+        .iter()
+        .filter(|p| !evidence.sight(p).allows_hidden())
+        .count()
+}
+
+/// `p` turned by `angle` about the axis `axis` (unit) through `centre`
+/// (Rodrigues' formula).
+fn turn(p: &Vec3, centre: &Vec3, axis: &Vec3, angle: f64) -> Vec3 {
+    let v = p - centre;
+    let (s, c) = (libm::sin(angle), libm::cos(angle));
+    centre + v * c + axis.cross(&v) * s + axis * (axis.dot(&v) * (1.0 - c))
+}
+
+/// The candidates for one run, the unchanged run first, then by growing change.
+fn candidates(nodes: &[Vec3], run: HiddenRun) -> Vec<Vec<Vec3>> {
+    let m = nodes.len();
+    let points = nodes[run.start..run.end].to_vec();
+    let mut out = alloc::vec![points.clone()];
+    let left = run.start.checked_sub(1);
+    let right = (run.end < m).then_some(run.end);
+    match (left, right) {
+        (Some(a), Some(b)) => {
+            let span = (run.end - run.start + 1) as f64;
+            for share in CHORD_SHARES {
+                out.push(
+                    points
+                        .iter()
+                        .enumerate()
+                        .map(|(k, p)| {
+                            let lambda = (k + 1) as f64 / span;
+                            let chord = nodes[a] + (nodes[b] - nodes[a]) * lambda;
+                            p + (chord - p) * share
+                        })
+                        .collect(),
+                );
+            }
+        }
+        (Some(anchor), None) | (None, Some(anchor)) => {
+            let centre = nodes[anchor];
+            let axis = Vec3::new(0.0, 0.0, 1.0);
+            for step in 1..=TURN_STEPS {
+                for sign in [1.0, -1.0] {
+                    let angle = sign * step as f64 * TURN_STEP;
+                    out.push(
+                        points
+                            .iter()
+                            .map(|p| turn(p, &centre, &axis, angle))
+                            .collect(),
+                    );
+                }
+            }
+        }
+        (None, None) => {}
+    }
+    out
+}
+
+/// Moves hidden runs (`known[m] == false`) out of free space, in place.
+pub fn clear_free_space(
+    nodes: &mut [Vec3],
+    known: &[bool],
+    evidence: &Evidence<'_>,
+) -> FreeSpaceReport {
+    let mut report = FreeSpaceReport::default();
+    if known.len() != nodes.len() {
+        return report;
+    }
+    for run in hidden_runs(known) {
+        let found = in_free_space(evidence, &nodes[run.start..run.end]);
+        report.found += found;
+        if found == 0 {
+            continue;
+        }
+        let mut best: Option<(usize, Vec<Vec3>)> = None;
+        for candidate in candidates(nodes, run) {
+            let count = in_free_space(evidence, &candidate);
+            if best.as_ref().is_none_or(|(c, _)| count < *c) {
+                let done = count == 0;
+                best = Some((count, candidate));
+                if done {
+                    break;
+                }
+            }
+        }
+        if let Some((count, points)) = best {
+            if count < found && points.iter().all(math::is_finite) {
+                nodes[run.start..run.end].copy_from_slice(&points);
+                report.runs_moved += 1;
+                report.left += count;
+            } else {
+                report.left += found;
+            }
+        }
+    }
+    report
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::perception::camera::CameraIntrinsics;
+    use crate::perception::frame::Frame;
+    use crate::perception::segmentation::{Mask, Rect};
+    use alloc::vec;
+
+    /// A table at 0.6 m seen by a 64 x 48 camera with an occlusion
+    /// rectangle over its right half.
+    struct Scene {
+        camera: CameraIntrinsics,
+        rgb: Vec<u8>,
+        depth: Vec<u16>,
+        mask: Mask,
+        rects: [Rect; 1],
+    }
+
+    impl Scene {
+        fn new() -> Self {
+            Self {
+                camera: CameraIntrinsics {
+                    width: 64,
+                    height: 48,
+                    fx: 60.0,
+                    fy: 60.0,
+                    cx: 32.0,
+                    cy: 24.0,
+                },
+                rgb: vec![0; 64 * 48 * 3],
+                depth: vec![600; 64 * 48],
+                mask: Mask::new(64, 48),
+                rects: [Rect {
+                    x: 32,
+                    y: 0,
+                    w: 32,
+                    h: 48,
+                }],
+            }
+        }
+    }
+
+    /// A point on the table plane (just above it) at pixel (u, v).
+    fn at(u: f64, v: f64) -> Vec3 {
+        Vec3::new((u - 32.0) * 0.59 / 60.0, (v - 24.0) * 0.59 / 60.0, 0.59)
+    }
+
+    #[test]
+    fn a_hidden_end_that_sticks_out_over_free_table_turns_back_under_the_occluder() {
+        let s = Scene::new();
+        let frame = Frame::new(64, 48, &s.rgb, &s.depth, 0.001).expect("frame");
+        let e = Evidence {
+            frame: &frame,
+            mask: &s.mask,
+            occlusions: &s.rects,
+            camera: &s.camera,
+            radius: 0.0075,
+        };
+        // Visible nodes 0-2 come in from the right edge to the
+        // rectangle's border; the hidden tip 3-5 carries on left, over free table.
+        let mut nodes = vec![
+            at(44.0, 24.0),
+            at(40.0, 24.0),
+            at(36.0, 24.0),
+            at(30.0, 24.0),
+            at(26.0, 24.0),
+            at(22.0, 24.0),
+        ];
+        let known = [true, true, true, false, false, false];
+        let before = nodes.clone();
+        let len = |p: &[Vec3]| p.windows(2).map(|w| (w[1] - w[0]).norm()).sum::<f64>();
+        let r = clear_free_space(&mut nodes, &known, &e);
+        assert_eq!((r.found, r.left, r.runs_moved), (3, 0, 1), "{r:?}");
+        for p in &nodes[3..] {
+            assert!(e.sight(p).allows_hidden(), "{p:?}");
+        }
+        // Turned, not stretched: the run keeps its length from the anchor.
+        assert!((len(&nodes[2..]) - len(&before[2..])).abs() < 1e-9);
+        assert_eq!(&nodes[..3], &before[..3]);
+    }
+
+    #[test]
+    fn a_middle_run_bulging_over_free_table_is_drawn_to_its_chord() {
+        let s = Scene::new();
+        let mut rects = s.rects;
+        // The occluder covers columns 26-37 of rows 20-28.
+        rects[0] = Rect {
+            x: 26,
+            y: 20,
+            w: 12,
+            h: 9,
+        };
+        let frame = Frame::new(64, 48, &s.rgb, &s.depth, 0.001).expect("frame");
+        let e = Evidence {
+            frame: &frame,
+            mask: &s.mask,
+            occlusions: &rects,
+            camera: &s.camera,
+            radius: 0.0075,
+        };
+        // Anchors at rows 18 and 30 either side of the band; the hidden
+        // middle bulges left into free table.
+        let mut nodes = vec![
+            at(32.0, 14.0),
+            at(32.0, 18.0),
+            at(20.0, 22.0),
+            at(20.0, 26.0),
+            at(32.0, 30.0),
+            at(32.0, 34.0),
+        ];
+        let known = [true, true, false, false, true, true];
+        let r = clear_free_space(&mut nodes, &known, &e);
+        assert_eq!(r.left, 0, "{r:?}");
+        assert!(nodes[2..4].iter().all(|p| e.sight(p).allows_hidden()));
+        // Nothing in free space: nothing moves.
+        let mut again = nodes.clone();
+        let r = clear_free_space(&mut again, &known, &e);
+        assert_eq!((r.found, r.runs_moved), (0, 0));
+        assert_eq!(again, nodes);
+    }
+}

@@ -1,0 +1,180 @@
+//! Length conservation of hidden ends (this project's addition after
+//! Eq. 11): a rope does not stretch, so a hidden run at an end of the rope
+//! may not be longer than the arc length that the rest of the rope leaves
+//! of the rope's known length. A run too long has its nodes placed evenly
+//! along its own estimated curve from the anchor (the last visible node)
+//! up to that length; a run shorter is left as it is (a hidden tip may lie
+//! curled up: nothing says where the missing length went).
+
+use alloc::vec::Vec;
+
+use super::slide::hidden_runs;
+use crate::math::{self, Vec3};
+
+/// What the stage did in one frame.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct LengthReport {
+    /// Hidden end runs re-spaced.
+    pub runs: usize,
+    /// Largest relative change of a run's length (0.1: 10 %).
+    pub largest_change: f64,
+}
+
+fn length(points: &[Vec3]) -> f64 {
+    points.windows(2).map(|w| math::norm(&(w[1] - w[0]))).sum()
+}
+
+/// `count` points after `curve[0]` evenly spaced by `step` along `curve`,
+/// continued straight past its end.
+fn along(curve: &[Vec3], count: usize, step: f64) -> Vec<Vec3> {
+    let mut out = Vec::with_capacity(count);
+    let mut k = 0;
+    let mut travelled = 0.0;
+    for i in 1..=count {
+        let target = step * i as f64;
+        while k + 2 < curve.len() && travelled + math::norm(&(curve[k + 1] - curve[k])) < target {
+            travelled += math::norm(&(curve[k + 1] - curve[k]));
+            k += 1;
+        }
+        let (a, b) = if curve.len() >= 2 {
+            (curve[k], curve[k + 1])
+        } else {
+            (curve[0], curve[0])
+        };
+        let seg = math::norm(&(b - a));
+        out.push(if seg > math::LENGTH_EPSILON {
+            a + (b - a) * ((target - travelled) / seg)
+        } else {
+            a
+        });
+    }
+    out
+}
+
+/// Re-spaces every hidden run that reaches an end of the rope (`known[m]`
+/// false) and is longer than its share, so that the whole rope is no
+/// longer than `rest_length`. Both ends hidden: each gets a share of what
+/// the middle leaves in proportion to its node count.
+pub fn conserve_end_lengths(nodes: &mut [Vec3], known: &[bool], rest_length: f64) -> LengthReport {
+    let mut report = LengthReport::default();
+    let m = nodes.len();
+    if known.len() != m || !(rest_length > 0.0) || !known.iter().any(|&k| k) {
+        return report;
+    }
+    let runs = hidden_runs(known);
+    let head = runs.first().filter(|r| r.start == 0).copied();
+    let tail = runs.last().filter(|r| r.end == m).copied();
+    // The part of the rope between the end runs (their anchors included).
+    let (from, to) = (
+        head.map_or(0, |r| r.end),
+        tail.map_or(m - 1, |r| r.start - 1),
+    );
+    if from > to {
+        return report;
+    }
+    let budget = rest_length - length(&nodes[from..=to]);
+    let ends: Vec<(usize, bool)> = [
+        head.map(|r| (r.end - r.start, true)),
+        tail.map(|r| (r.end - r.start, false)),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    let total: usize = ends.iter().map(|(n, _)| n).sum();
+    if total == 0 {
+        return report;
+    }
+    for (count, at_head) in ends {
+        let share = (budget * count as f64 / total as f64).max(0.0);
+        // The run's curve from its anchor outwards.
+        let curve: Vec<Vec3> = if at_head {
+            nodes[..=count].iter().rev().copied().collect()
+        } else {
+            nodes[m - 1 - count..].to_vec()
+        };
+        let old = length(&curve);
+        if old <= share {
+            continue;
+        }
+        let placed = along(&curve, count, share / count as f64);
+        if !placed.iter().all(math::is_finite) {
+            continue;
+        }
+        if old > 0.0 {
+            report.largest_change = report.largest_change.max((share - old).abs() / old);
+        }
+        report.runs += 1;
+        if at_head {
+            for (k, p) in placed.into_iter().enumerate() {
+                nodes[count - 1 - k] = p;
+            }
+        } else {
+            nodes[m - count..].copy_from_slice(&placed);
+        }
+    }
+    report
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn line(n: usize, step: f64) -> Vec<Vec3> {
+        (0..n)
+            .map(|i| Vec3::new(i as f64 * step, 0.0, 0.6))
+            .collect()
+    }
+
+    #[test]
+    fn a_stretched_hidden_tail_is_brought_back_to_the_rope_length() {
+        // Ten nodes, 1 cm spacing, rope 9 cm; the hidden tail (7-9) was
+        // extrapolated 3 cm a step, running off.
+        let mut nodes = line(10, 0.01);
+        for (k, i) in (7..10).enumerate() {
+            nodes[i] = Vec3::new(0.06 + 0.03 * (k + 1) as f64, 0.0, 0.6);
+        }
+        let known: Vec<bool> = (0..10).map(|i| i < 7).collect();
+        let r = conserve_end_lengths(&mut nodes, &known, 0.09);
+        assert_eq!(r.runs, 1);
+        assert!((length(&nodes) - 0.09).abs() < 1e-12);
+        for (i, p) in nodes.iter().enumerate() {
+            assert!((p.x - i as f64 * 0.01).abs() < 1e-12, "node {i}: {p:?}");
+        }
+    }
+
+    #[test]
+    fn a_stretched_hidden_head_keeps_its_bend_and_a_short_one_is_left_alone() {
+        // Hidden head 0-2 bent at a right angle, stretched to 2 cm spacing.
+        let mut nodes = line(10, 0.01);
+        nodes[2] = Vec3::new(0.01, 0.0, 0.6);
+        nodes[1] = Vec3::new(0.01, 0.02, 0.6);
+        nodes[0] = Vec3::new(0.01, 0.04, 0.6);
+        let known: Vec<bool> = (0..10).map(|i| i > 2).collect();
+        let r = conserve_end_lengths(&mut nodes, &known, 0.09);
+        assert_eq!(r.runs, 1);
+        assert!((length(&nodes) - 0.09).abs() < 1e-12);
+        // Even spacing of 1 cm along the bent curve from the anchor (x = 3 cm).
+        assert!((nodes[2] - Vec3::new(0.02, 0.0, 0.6)).norm() < 1e-12);
+        assert!((nodes[1] - Vec3::new(0.01, 0.0, 0.6)).norm() < 1e-12);
+        assert!((nodes[0] - Vec3::new(0.01, 0.01, 0.6)).norm() < 1e-12);
+        // Compressed instead: left alone.
+        let mut short = line(10, 0.01);
+        short[0] = Vec3::new(0.015, 0.0, 0.6);
+        let before = short.clone();
+        let known: Vec<bool> = (0..10).map(|i| i > 0).collect();
+        assert_eq!(conserve_end_lengths(&mut short, &known, 0.09).runs, 0);
+        assert_eq!(short, before);
+    }
+
+    #[test]
+    fn middle_runs_and_fully_visible_ropes_are_left_alone() {
+        let mut nodes = line(10, 0.01);
+        nodes[5].y = 0.02;
+        let before = nodes.clone();
+        let known: Vec<bool> = (0..10).map(|i| i != 5).collect();
+        assert_eq!(conserve_end_lengths(&mut nodes, &known, 0.09).runs, 0);
+        assert_eq!(conserve_end_lengths(&mut nodes, &[true; 10], 0.09).runs, 0);
+        assert_eq!(conserve_end_lengths(&mut nodes, &[false; 10], 0.09).runs, 0);
+        assert_eq!(nodes, before);
+    }
+}
