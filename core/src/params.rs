@@ -108,13 +108,18 @@ impl Params {
     /// tracking step. The shared pipeline (segmentation, cloud, radius,
     /// initialisation) is the same as the defaults'.
     pub fn paper() -> Self {
-        let mut p = Self::default();
-        p.visibility_min_fraction = 0.0;
-        p.upetrack.end_displacement_weight = p.upetrack.displacement_weight;
-        p.upetrack.hidden_motion = crate::upe::occlusion::HiddenMotion::Paper;
-        p.upetrack.free_space = false;
-        p.upetrack.conserve_length = false;
-        p
+        let upe = UpeTrackParams::default();
+        Self {
+            visibility_min_fraction: 0.0,
+            upetrack: UpeTrackParams {
+                end_displacement_weight: upe.displacement_weight,
+                hidden_motion: crate::upe::occlusion::HiddenMotion::Paper,
+                free_space: false,
+                conserve_length: false,
+                ..upe
+            },
+            ..Self::default()
+        }
     }
 
     /// A named preset: `default` or `paper`.
