@@ -16,6 +16,10 @@ files=(
   core/src/upe/resampling.rs
   core/src/upe/visibility.rs
   core/src/upe/mod.rs
+  core/src/upe/slide.rs
+  core/src/upe/length.rs
+  core/src/upe/free_space.rs
+  core/src/perception/evidence.rs
   core/src/metrics.rs
   core/src/perception/segmentation.rs
   core/src/params.rs

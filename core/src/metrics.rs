@@ -65,6 +65,30 @@ pub fn frame_error_px(nodes: &[Vec3], truth: &[Vec3], camera: &CameraIntrinsics)
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn distance_to_a_polyline_is_to_its_nearest_segment_point() {
+        use nalgebra::Vector2;
+        let curve = [
+            Vector2::new(1.0, 1.0),
+            Vector2::new(5.0, 1.0),
+            Vector2::new(5.0, 1.0),
+            Vector2::new(5.0, 7.0),
+        ];
+        // Above the middle of the first segment, 2 away.
+        let d = distance_to_polyline(&Vector2::new(3.0, 3.0), &curve).expect("curve");
+        assert!((d - 2.0).abs() < 1e-12, "{d}");
+        // Beside the last segment, 1.5 away (past the repeated vertex).
+        let d = distance_to_polyline(&Vector2::new(3.5, 5.0), &curve).expect("curve");
+        assert!((d - 1.5).abs() < 1e-12, "{d}");
+        // Beyond the first end: the distance to the end point.
+        let d = distance_to_polyline(&Vector2::new(-2.0, 5.0), &curve).expect("curve");
+        assert!((d - 5.0).abs() < 1e-12, "{d}");
+        assert_eq!(
+            distance_to_polyline::<2>(&Vector2::new(0.0, 0.0), &[]),
+            None
+        );
+    }
     use alloc::vec;
 
     #[test]

@@ -255,15 +255,43 @@ mod tests {
     }
 
     #[test]
+    fn boundary_values_are_accepted_and_the_cloud_follows_the_radius() {
+        let p = Params {
+            visibility_radius: 1.0,
+            max_depth: 100.0,
+            min_depth: 0.0,
+            voxel_size: 0.0,
+            reinit_visible_fraction: 1.0,
+            ..Params::default()
+        };
+        assert_eq!(p.validate(), Ok(()));
+        let c = Params::default().cloud();
+        assert!((c.axis_offset - 0.0075 * core::f64::consts::FRAC_PI_4).abs() < 1e-15);
+        assert_eq!((c.min_depth, c.max_depth, c.voxel_size), (0.1, 3.0, 0.008));
+    }
+
+    #[test]
     fn invalid_values_are_rejected_by_name() {
         type Case = (&'static str, fn(&mut Params));
-        let cases: [Case; 14] = [
+        let cases: [Case; 26] = [
             ("reinit_visible_fraction", |p| {
                 p.reinit_visible_fraction = -5.0
             }),
             ("reinit_visible_fraction", |p| {
                 p.reinit_visible_fraction = 1e300
             }),
+            ("visibility_radius", |p| p.visibility_radius = 0.0),
+            ("visibility_radius", |p| p.visibility_radius = 2.0),
+            ("max_depth", |p| p.max_depth = 0.0),
+            ("max_depth", |p| p.max_depth = 200.0),
+            ("min_depth", |p| p.min_depth = -0.1),
+            ("min_depth", |p| p.min_depth = p.max_depth),
+            ("em_tolerance", |p| p.upetrack.em_tolerance = 0.0),
+            ("em_tolerance", |p| p.upetrack.em_tolerance = 2.0),
+            ("min_variance", |p| p.upetrack.min_variance = 0.0),
+            ("min_variance", |p| p.upetrack.min_variance = 2.0),
+            ("voxel_size", |p| p.voxel_size = 0.2),
+            ("dlo_radius", |p| p.dlo_radius = -0.001),
             ("cpd.beta", |p| p.cpd.beta = 0.0),
             ("trackdlo.mu", |p| p.trackdlo.mu = 1.0),
             ("trackdlo.max_iterations", |p| p.trackdlo.max_iterations = 0),

@@ -318,6 +318,52 @@ mod tests {
         assert_eq!(rgb_to_hsv([255, 0, 255]), [150, 255, 255]);
     }
 
+    /// The fixed-point conversion against HSV's definition in floating point
+    /// (OpenCV's 8-bit scaling: H = hue in degrees / 2, S = 255 diff / V),
+    /// on every colour of a grid: never more than one unit apart (the
+    /// tables round once more), and equal on 97 % of the colours.
+    #[test]
+    fn hsv_follows_its_definition_over_an_rgb_grid() {
+        let (mut total, mut equal) = (0, 0);
+        for r in (0..=255).step_by(3) {
+            for g in (0..=255).step_by(3) {
+                for b in (0..=255).step_by(3) {
+                    let (rf, gf, bf) = (r as f64, g as f64, b as f64);
+                    let v = rf.max(gf).max(bf);
+                    let diff = v - rf.min(gf).min(bf);
+                    let s_ref = if v > 0.0 { 255.0 * diff / v } else { 0.0 };
+                    let h_deg = if diff == 0.0 {
+                        0.0
+                    } else if v == rf {
+                        60.0 * (gf - bf) / diff
+                    } else if v == gf {
+                        120.0 + 60.0 * (bf - rf) / diff
+                    } else {
+                        240.0 + 60.0 * (rf - gf) / diff
+                    };
+                    let h_ref = (h_deg / 2.0).rem_euclid(180.0);
+                    let [h, s, vv] = rgb_to_hsv([r as u8, g as u8, b as u8]);
+                    assert_eq!(vv as f64, v);
+                    let dh = (h as f64 - h_ref).abs();
+                    let dh = dh.min(180.0 - dh);
+                    assert!(dh <= 1.0, "{r} {g} {b}: h {h} vs {h_ref}");
+                    assert!(
+                        (s as f64 - s_ref).abs() <= 1.0,
+                        "{r} {g} {b}: s {s} vs {s_ref}"
+                    );
+                    total += 1;
+                    if (h as f64 - libm::round(h_ref) % 180.0).abs() < 0.5
+                        && (s as f64 - libm::round(s_ref)).abs() < 0.5
+                    {
+                        equal += 1;
+                    }
+                }
+            }
+        }
+        // Measured: 617723 of 636056 (97.1 %); the rest are rounding ties.
+        assert!(equal as f64 >= 0.965 * total as f64, "{equal} of {total}");
+    }
+
     /// The fast path (value and saturation first, hue table) agrees with
     /// `rgb_to_hsv` + `contains` on every colour of a coarse RGB grid.
     #[test]
@@ -376,6 +422,73 @@ mod tests {
         // Blue (S 229, V 200): saturation and value reach 70 and 90 below.
         assert_eq!(rgb_to_hsv([20, 60, 200])[1..], [229, 200]);
         assert_eq!(HsvRange::around([20, 60, 200]).lower[1..], [159, 110]);
+    }
+
+    #[test]
+    fn rectangles_and_masks_answer_for_their_own_pixels_only() {
+        let r = Rect {
+            x: 2,
+            y: 3,
+            w: 4,
+            h: 2,
+        };
+        let inside: Vec<(i64, i64)> = (0..10)
+            .flat_map(|v| (0..10).map(move |u| (u, v)))
+            .filter(|&(u, v)| r.contains(u, v))
+            .collect();
+        let expect: Vec<(i64, i64)> = (3..5).flat_map(|v| (2..6).map(move |u| (u, v))).collect();
+        assert_eq!(inside, expect);
+        assert_eq!(r.clip(4, 4), Some((2, 4, 3, 4)));
+        assert_eq!(r.clip(2, 10), None);
+        assert_eq!(
+            Rect {
+                x: 0,
+                y: 0,
+                w: 0,
+                h: 5
+            }
+            .clip(10, 10),
+            None
+        );
+        let mut m = Mask::new(3, 2);
+        m.data[5] = true;
+        assert!(m.get(2, 1));
+        for (u, v) in [(3, 1), (2, 2), (-1, 1), (2, -1), (0, 0), (1, 1)] {
+            assert!(!m.get(u, v), "({u}, {v})");
+        }
+        assert_eq!(m.count(), 1);
+    }
+
+    #[test]
+    fn the_hsv_box_needs_every_channel_inside() {
+        let r = HsvRange {
+            lower: [100, 50, 60],
+            upper: [120, 200, 210],
+        };
+        assert!(r.contains([110, 100, 100]));
+        for hsv in [
+            [99, 100, 100],
+            [121, 100, 100],
+            [110, 49, 100],
+            [110, 201, 100],
+            [110, 100, 59],
+            [110, 100, 211],
+        ] {
+            assert!(!r.contains(hsv), "{hsv:?}");
+        }
+        // Hue 179 is the last valid one.
+        assert!(HsvRange {
+            lower: [0, 0, 0],
+            upper: [179, 255, 255]
+        }
+        .validate()
+        .is_ok());
+        assert!(HsvRange {
+            lower: [180, 0, 0],
+            upper: [179, 255, 255]
+        }
+        .validate()
+        .is_err());
     }
 
     #[test]

@@ -458,6 +458,72 @@ mod tests {
     }
 
     #[test]
+    fn fallback_weighs_known_nodes_by_gamma_to_their_distance() {
+        // Known 0, 2, 5 moved by 1, 2, 4 cm in y; hidden node 1 is one step
+        // from 0 and 2 (weight gamma^0 each) and four from 5 (gamma^3).
+        let c = UpeCoefficients {
+            displacement_decay: 0.5,
+            ..PAPER
+        };
+        let prev: Vec<Vec3> = (0..6).map(|i| Vec3::new(i as f64, 0.0, 0.0)).collect();
+        let known = vec![true, false, true, false, false, true];
+        let mut nodes = prev.clone();
+        for (i, dy) in [(0, 1.0), (2, 2.0), (5, 4.0)] {
+            nodes[i].y += dy;
+        }
+        estimate_hidden(&mut nodes, &known, &prev, &c);
+        let expect = (1.0 + 2.0 + 4.0 * 0.125) / (1.0 + 1.0 + 0.125);
+        assert!(
+            (nodes[1].y - expect).abs() < 1e-12,
+            "{} vs {expect}",
+            nodes[1].y
+        );
+        // Node 3: distances 3, 1, 2: weights 0.25, 1, 0.5.
+        let expect = (0.25 + 2.0 + 4.0 * 0.5) / (0.25 + 1.0 + 0.5);
+        assert!(
+            (nodes[3].y - expect).abs() < 1e-12,
+            "{} vs {expect}",
+            nodes[3].y
+        );
+    }
+
+    #[test]
+    fn coinciding_known_nodes_keep_last_frames_direction() {
+        // n1 and n2 are at the same place this frame: Eq. 8 has no direction,
+        // so y* = y_n1 + b (y_m - y_n1) at t-1.
+        let c = UpeCoefficients {
+            displacement_weight: 0.0,
+            curvature_retention: 0.0,
+            bending_resistance: 0.5,
+            ..PAPER
+        };
+        let prev: Vec<Vec3> = (0..4).map(|i| Vec3::new(i as f64, 0.0, 0.0)).collect();
+        let mut now = prev.clone();
+        now[2] = Vec3::new(1.0, 1.0, 0.0);
+        now[1] = Vec3::new(1.0, 1.0, 0.0);
+        let y = estimate_node(3, [2, 1, 0], &now, &prev, &c);
+        assert!((y - Vec3::new(1.5, 1.0, 0.0)).norm() < 1e-12, "{y:?}");
+    }
+
+    #[test]
+    fn mismatched_lengths_change_nothing() {
+        let prev: Vec<Vec3> = (0..6).map(|i| Vec3::new(i as f64, 0.0, 0.0)).collect();
+        let mut nodes = prev.clone();
+        nodes[1].y = 1.0;
+        let before = nodes.clone();
+        let known = vec![true, false, true, true, true, true];
+        assert_eq!(
+            estimate_hidden(&mut nodes, &known[..5], &prev, &PAPER),
+            UpeReport::default()
+        );
+        assert_eq!(
+            estimate_hidden(&mut nodes, &known, &prev[..5], &PAPER),
+            UpeReport::default()
+        );
+        assert_eq!(nodes, before);
+    }
+
+    #[test]
     fn end_runs_are_told_from_middle_runs() {
         let known = [false, false, true, true, false, true, false, false];
         assert_eq!(

@@ -326,4 +326,122 @@ mod tests {
             assert!(r.variance.is_finite() && r.variance > 0.0, "case {case}");
         }
     }
+
+    /// Eq. 4-5 written out directly (every node-point pair, `libm::exp`, no
+    /// candidate lists; terms past `EXPONENT_CUTOFF` dropped, as documented)
+    /// for the optimised loop to be checked against.
+    fn reference_em(
+        cloud: &[Vec3],
+        nodes: &mut [Vec3],
+        active: &[bool],
+        s: &EmSettings,
+    ) -> (u32, f64) {
+        let idx: Vec<usize> = (0..nodes.len()).filter(|&m| active[m]).collect();
+        // Start: mean squared nearest-node distance per dimension, between
+        // the floor and the squared mean node spacing.
+        let sum: f64 = cloud
+            .iter()
+            .map(|x| {
+                idx.iter()
+                    .map(|&m| (x - nodes[m]).norm_squared())
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .sum();
+        let len: f64 = nodes.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
+        let spacing = len / (nodes.len() - 1) as f64;
+        let mut var = (sum / (cloud.len() as f64 * 3.0)).clamp(s.min_variance, spacing * spacing);
+        let (k, n, w) = (idx.len() as f64, cloud.len() as f64, s.outlier_weight);
+        for it in 1..=s.max_iterations {
+            let mu = libm::pow(2.0 * core::f64::consts::PI * var, 1.5) * w * k / ((1.0 - w) * n);
+            // P[i][j] for point i and active node j.
+            let p: Vec<Vec<f64>> = cloud
+                .iter()
+                .map(|x| {
+                    let g: Vec<f64> = idx
+                        .iter()
+                        .map(|&m| {
+                            let e = (x - nodes[m]).norm_squared() / (2.0 * var);
+                            if e < 20.0 {
+                                libm::exp(-e)
+                            } else {
+                                0.0
+                            }
+                        })
+                        .collect();
+                    let denom: f64 = g.iter().sum::<f64>() + mu;
+                    g.iter().map(|gj| gj / denom).collect()
+                })
+                .collect();
+            let (mut shift, mut spread, mut total) = (0.0f64, 0.0, 0.0);
+            for (j, &m) in idx.iter().enumerate() {
+                let p1: f64 = p.iter().map(|row| row[j]).sum();
+                if p1 > 1e-9 {
+                    let y = cloud
+                        .iter()
+                        .zip(&p)
+                        .fold(Vec3::zeros(), |acc, (x, row)| acc + x * row[j])
+                        / p1;
+                    shift = shift.max((y - nodes[m]).norm());
+                    nodes[m] = y;
+                    spread += cloud
+                        .iter()
+                        .zip(&p)
+                        .map(|(x, row)| row[j] * (x - y).norm_squared())
+                        .sum::<f64>();
+                    total += p1;
+                }
+            }
+            var = (spread / (3.0 * total)).max(s.min_variance);
+            if shift < s.tolerance {
+                return (it, var);
+            }
+        }
+        (s.max_iterations, var)
+    }
+
+    #[test]
+    fn the_optimised_em_is_eq_4_and_5_written_out() {
+        let mut rng = SplitMix64::new(11);
+        for case in 0..20 {
+            // A noisy curve of points and nodes near it, some hidden.
+            let m = 6 + case % 7;
+            let cloud: Vec<Vec3> = (0..60 + 7 * case)
+                .map(|i| {
+                    let t = i as f64 * 0.004;
+                    Vec3::new(t, 0.02 * libm::sin(8.0 * t), 0.6)
+                        + Vec3::new(rng.normal(), rng.normal(), rng.normal()) * 0.002
+                })
+                .collect();
+            let mut nodes: Vec<Vec3> = (0..m)
+                .map(|i| {
+                    Vec3::new(
+                        i as f64 * 0.3 / m as f64,
+                        0.004 * rng.normal(),
+                        0.6 + 0.003 * rng.normal(),
+                    )
+                })
+                .collect();
+            let active: Vec<bool> = (0..m).map(|i| i % 4 != 3).collect();
+            let s = EmSettings {
+                outlier_weight: 0.05 + 0.2 * rng.uniform(),
+                tolerance: 1e-4,
+                max_iterations: 1 + case as u32 % 5,
+                min_variance: 1e-6,
+            };
+            let mut expect = nodes.clone();
+            let (it, var) = reference_em(&cloud, &mut expect, &active, &s);
+            let r = register(&cloud, &mut nodes, &active, &s);
+            assert_eq!(r.iterations, it, "case {case}");
+            // Rounding only: exp_neg is within 1e-13 of exp, and the spread is
+            // summed as sum P x^2 - |sum P x|^2 / sum P.
+            assert!(
+                (r.variance - var).abs() < 1e-7 * var,
+                "case {case}: {} vs {var}",
+                r.variance
+            );
+            for (a, b) in nodes.iter().zip(&expect) {
+                assert!((a - b).norm() < 1e-10, "case {case}: {a:?} vs {b:?}");
+            }
+        }
+    }
 }

@@ -56,6 +56,35 @@ pub fn resample_uniform(points: &[Vec3], count: usize) -> Vec<Vec3> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn nodes_land_at_exact_arc_lengths_across_segment_ends() {
+        // Segments of 1, 2 and 1 (length 4): 5 nodes at 0, 1, 2, 3, 4.
+        let pts = [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(1.0, 2.0, 0.0),
+            Vec3::new(2.0, 2.0, 0.0),
+        ];
+        let out = resample_uniform(&pts, 5);
+        let expect = [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(1.0, 2.0, 0.0),
+            Vec3::new(2.0, 2.0, 0.0),
+        ];
+        for (a, b) in out.iter().zip(&expect) {
+            assert!((a - b).norm() < 1e-12, "{a:?} vs {b:?}");
+        }
+        // A repeated point (zero-length segment) changes nothing.
+        let with_repeat = [pts[0], pts[1], pts[1], pts[2], pts[3]];
+        for (a, b) in resample_uniform(&with_repeat, 5).iter().zip(&expect) {
+            assert!((a - b).norm() < 1e-12, "{a:?} vs {b:?}");
+        }
+        assert_eq!(resample_uniform(&pts, 1), vec![pts[0]]);
+        assert_eq!(resample_uniform(&[pts[0], pts[0]], 3), vec![pts[0]; 3]);
+    }
     use crate::rng::SplitMix64;
     use alloc::vec;
 
