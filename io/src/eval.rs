@@ -107,6 +107,8 @@ pub struct Summary {
     pub frames: usize,
     /// Frames reported lost.
     pub lost_frames: usize,
+    /// Frames where the state contradicted the images and the rope was found again.
+    pub recovered_frames: usize,
     /// Frames with ground truth and nodes.
     pub evaluated_frames: usize,
     /// Frame error in millimetres.
@@ -213,6 +215,7 @@ pub fn summarise(
         algorithm: result.algorithm.clone(),
         frames: result.frames.len(),
         lost_frames: result.frames.iter().filter(|f| f.lost).count(),
+        recovered_frames: result.frames.iter().filter(|f| f.recovered).count(),
         evaluated_frames: errs.len(),
         mm: ErrorStats::of(&mm),
         px: ErrorStats::of(&px),

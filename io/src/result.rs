@@ -23,6 +23,10 @@ pub struct FrameRecord {
     /// Why, when lost.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reason: Option<String>,
+    /// `true` when the tracked state contradicted the images and the rope
+    /// was found again from what is visible.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub recovered: bool,
 }
 
 /// A whole result file.

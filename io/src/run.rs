@@ -64,6 +64,7 @@ pub fn track_frame(
         total_ms: t.total_ms,
         lost: reason.is_some(),
         reason,
+        recovered: t.output.status == FrameStatus::Recovered,
     })
 }
 

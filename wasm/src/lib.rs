@@ -247,6 +247,7 @@ impl WasmTracker {
         let (status, reason) = match &out.status {
             FrameStatus::Initialised => ("initialised", None),
             FrameStatus::Tracked => ("tracked", None),
+            FrameStatus::Recovered => ("recovered", None),
             FrameStatus::Lost(r) => ("lost", Some(r.to_string())),
         };
         let result = FrameResult {

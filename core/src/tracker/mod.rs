@@ -23,6 +23,17 @@ use crate::upe::visibility::visible_nodes_relative;
 mod stepper;
 pub use stepper::{StepReports, Stepper};
 
+/// A tracked rope longer than this multiple of its length at
+/// initialisation contradicts the images (ropes do not stretch).
+pub const STRETCH_LIMIT: f64 = 1.2;
+/// Hidden nodes that must stay in free space for the state to contradict the images.
+pub const MIN_NODES_IN_FREE_SPACE: usize = 3;
+/// A cloud point farther than this many visibility radii from every node
+/// is rope the nodes do not explain.
+pub const UNEXPLAINED_REACH: f64 = 2.0;
+/// Share of the cloud left unexplained that contradicts the state.
+pub const UNEXPLAINED_LIMIT: f64 = 0.3;
+
 /// Errors building or reconfiguring a tracker.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum TrackerError {
@@ -69,6 +80,10 @@ pub enum FrameStatus {
     Initialised,
     /// Nodes were tracked from the previous frame.
     Tracked,
+    /// The tracked state contradicted the images (a stretched rope, hidden
+    /// nodes in free space, rope in view far from every node) and the rope
+    /// was found again from what is visible.
+    Recovered,
     /// No tracking this frame; the nodes shown are the last known ones.
     Lost(LostReason),
 }
@@ -337,6 +352,12 @@ impl Tracker {
             },
             &self.params,
         );
+        if self.contradicts_evidence(&out.nodes, &obs.cloud, &out.report) {
+            if let Ok(mut again) = self.try_initialise(frame, obs) {
+                again.status = FrameStatus::Recovered;
+                return again;
+            }
+        }
         self.state = Some(TrackState {
             nodes: out.nodes.clone(),
             lost: false,
@@ -349,6 +370,30 @@ impl Tracker {
             upe: out.report.upe,
             trackdlo: out.report.trackdlo,
         }
+    }
+
+    /// `true` when the nodes after a step cannot be the rope in these
+    /// images: the rope stretched past [`STRETCH_LIMIT`] of its length,
+    /// most hidden nodes left in free space, or more than
+    /// [`UNEXPLAINED_LIMIT`] of the cloud far from every node.
+    fn contradicts_evidence(&self, nodes: &[Vec3], cloud: &[Vec3], report: &StepReports) -> bool {
+        let stretched = self
+            .rest_length
+            .is_some_and(|l| polyline_length(nodes) > STRETCH_LIMIT * l);
+        let in_free_space = report
+            .free_space
+            .is_some_and(|f| f.left >= MIN_NODES_IN_FREE_SPACE && 2 * f.left > f.found);
+        let reach = UNEXPLAINED_REACH * self.params.visibility_radius;
+        let far = cloud
+            .iter()
+            .filter(|x| {
+                nodes
+                    .iter()
+                    .all(|y| (*x - y).norm_squared() > reach * reach)
+            })
+            .count();
+        let unexplained = !cloud.is_empty() && far as f64 > UNEXPLAINED_LIMIT * cloud.len() as f64;
+        stretched || in_free_space || unexplained
     }
 
     /// [`Tracker::observe`] then [`Tracker::update`].

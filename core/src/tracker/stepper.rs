@@ -7,6 +7,7 @@ use crate::baselines::trackdlo::{TrackDloReport, TrackDloStep};
 use crate::math::{self, Vec3};
 use crate::params::Params;
 use crate::step::{Algorithm, StepInput, StepOutput, TrackingStep};
+use crate::upe::free_space::FreeSpaceReport;
 use crate::upe::occlusion::UpeReport;
 use crate::upe::registration::EmReport;
 use crate::upe::UpeTrackStep;
@@ -20,6 +21,8 @@ pub struct StepReports {
     pub upe: Option<UpeReport>,
     /// TrackDLO's report.
     pub trackdlo: Option<TrackDloReport>,
+    /// UPETrack's free-space check.
+    pub free_space: Option<FreeSpaceReport>,
 }
 
 /// One of the algorithms' steps, with its state.
