@@ -3,7 +3,7 @@
 
 export const $ = (id) => document.getElementById(id);
 
-export const ALGORITHM_NAMES = { upetrack: 'UPETrack', cpd: 'CPD', trackdlo: 'TrackDLO' };
+export const ALGORITHM_NAMES = { upetrack: 'UPETrack', cpd: 'CPD', trackdlo: 'TrackDLO', cdcpd2: 'CDCPD2' };
 
 export const state = {
   seq: null,          // { name, info, read(path), fromZip }

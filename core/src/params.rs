@@ -7,6 +7,8 @@
 //! shared ones (the file format predates the split), the baselines' under
 //! `"cpd"` and `"trackdlo"`.
 
+#[cfg(feature = "cdcpd2")]
+use crate::baselines::cdcpd2::Cdcpd2Settings;
 use crate::baselines::cpd::CpdSettings;
 use crate::baselines::trackdlo::TrackDloParams;
 use crate::perception::initialisation::InitSettings;
@@ -73,6 +75,9 @@ pub struct Params {
     pub cpd: CpdSettings,
     /// TrackDLO's parameters (used when `algorithm` is TrackDLO).
     pub trackdlo: TrackDloParams,
+    /// CDCPD2's settings (used when `algorithm` is CDCPD2).
+    #[cfg(feature = "cdcpd2")]
+    pub cdcpd2: Cdcpd2Settings,
 }
 
 impl Default for Params {
@@ -97,6 +102,8 @@ impl Default for Params {
             algorithm: Algorithm::Upetrack,
             cpd: CpdSettings::default(),
             trackdlo: TrackDloParams::default(),
+            #[cfg(feature = "cdcpd2")]
+            cdcpd2: Cdcpd2Settings::default(),
         }
     }
 }
@@ -204,6 +211,16 @@ impl Params {
         )?;
         self.upetrack.validate()?;
         self.cpd.validate()?;
+        #[cfg(feature = "cdcpd2")]
+        self.cdcpd2.validate()?;
+        #[cfg(not(feature = "cdcpd2"))]
+        if self.algorithm == Algorithm::Cdcpd2 {
+            return Err(ParamsError::Unavailable {
+                name: "algorithm",
+                value: "cdcpd2",
+                feature: "cdcpd2",
+            });
+        }
         self.trackdlo.validate()
     }
 

@@ -25,11 +25,19 @@ pub enum Algorithm {
     Cpd,
     /// TrackDLO (Xiang et al. 2023), reimplemented (baseline).
     Trackdlo,
+    /// CDCPD2 (Wang et al. 2021), reimplemented with a convex QP (baseline;
+    /// needs the core's `cdcpd2` feature).
+    Cdcpd2,
 }
 
 impl Algorithm {
     /// Every algorithm, UPETrack first.
-    pub const ALL: [Algorithm; 3] = [Algorithm::Upetrack, Algorithm::Cpd, Algorithm::Trackdlo];
+    pub const ALL: [Algorithm; 4] = [
+        Algorithm::Upetrack,
+        Algorithm::Cpd,
+        Algorithm::Trackdlo,
+        Algorithm::Cdcpd2,
+    ];
 
     /// The name used on the command line and in result files.
     pub fn name(self) -> &'static str {
@@ -37,6 +45,7 @@ impl Algorithm {
             Algorithm::Upetrack => "upetrack",
             Algorithm::Cpd => "cpd",
             Algorithm::Trackdlo => "trackdlo",
+            Algorithm::Cdcpd2 => "cdcpd2",
         }
     }
 

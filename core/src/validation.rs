@@ -15,6 +15,16 @@ pub enum ParamsError {
         /// The accepted range, in words.
         expected: &'static str,
     },
+    /// A choice this build does not include.
+    #[error("parameter `{name}` = {value} needs the core built with its `{feature}` feature")]
+    Unavailable {
+        /// Field name.
+        name: &'static str,
+        /// The choice.
+        value: &'static str,
+        /// The feature it needs.
+        feature: &'static str,
+    },
 }
 
 /// `Ok` when `ok` holds and `value` is finite, else the error naming `name`.

@@ -1,4 +1,4 @@
-//! The baselines' tracking steps (CPD, TrackDLO) on arbitrary node sets and
+//! The baselines' tracking steps (CPD, TrackDLO, CDCPD2) on arbitrary node sets and
 //! clouds: no panic, and the nodes that come out are finite.
 #![no_main]
 
@@ -12,7 +12,7 @@ fuzz_target!(|data: &[u8]| {
     if data.len() < 3 {
         return;
     }
-    let algorithm = if data[0] % 2 == 0 { Algorithm::Cpd } else { Algorithm::Trackdlo };
+    let algorithm = [Algorithm::Cpd, Algorithm::Trackdlo, Algorithm::Cdcpd2][data[0] as usize % 3];
     let m = 4 + (data[1] as usize % 30);
     let values: Vec<f64> = data[2..]
         .chunks_exact(4)

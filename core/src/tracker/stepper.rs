@@ -2,6 +2,8 @@
 //! tracker stays `Clone` and its snapshots serialisable. Adding an algorithm
 //! adds one variant here.
 
+#[cfg(feature = "cdcpd2")]
+use crate::baselines::cdcpd2::{Cdcpd2Report, Cdcpd2Step};
 use crate::baselines::cpd::CpdStep;
 use crate::baselines::trackdlo::{TrackDloReport, TrackDloStep};
 use crate::math::{self, Vec3};
@@ -23,6 +25,9 @@ pub struct StepReports {
     pub trackdlo: Option<TrackDloReport>,
     /// UPETrack's free-space check.
     pub free_space: Option<FreeSpaceReport>,
+    /// CDCPD2's report.
+    #[cfg(feature = "cdcpd2")]
+    pub cdcpd2: Option<Cdcpd2Report>,
 }
 
 /// One of the algorithms' steps, with its state.
@@ -35,6 +40,9 @@ pub enum Stepper {
     Cpd,
     /// TrackDLO with its state.
     Trackdlo(TrackDloStep),
+    /// CDCPD2 with its state.
+    #[cfg(feature = "cdcpd2")]
+    Cdcpd2(Cdcpd2Step),
 }
 
 impl Stepper {
@@ -44,6 +52,11 @@ impl Stepper {
             Algorithm::Upetrack => Stepper::Upetrack,
             Algorithm::Cpd => Stepper::Cpd,
             Algorithm::Trackdlo => Stepper::Trackdlo(TrackDloStep::default()),
+            #[cfg(feature = "cdcpd2")]
+            Algorithm::Cdcpd2 => Stepper::Cdcpd2(Cdcpd2Step::default()),
+            // Refused by `Params::validate` in a build without the feature.
+            #[cfg(not(feature = "cdcpd2"))]
+            Algorithm::Cdcpd2 => Stepper::Upetrack,
         }
     }
 
@@ -53,6 +66,8 @@ impl Stepper {
             Stepper::Upetrack => UpeTrackStep::ALGORITHM,
             Stepper::Cpd => CpdStep::ALGORITHM,
             Stepper::Trackdlo(_) => TrackDloStep::ALGORITHM,
+            #[cfg(feature = "cdcpd2")]
+            Stepper::Cdcpd2(_) => Cdcpd2Step::ALGORITHM,
         }
     }
 
@@ -62,6 +77,8 @@ impl Stepper {
             Stepper::Upetrack => UpeTrackStep.start(nodes),
             Stepper::Cpd => CpdStep.start(nodes),
             Stepper::Trackdlo(s) => s.start(nodes),
+            #[cfg(feature = "cdcpd2")]
+            Stepper::Cdcpd2(s) => s.start(nodes),
         }
     }
 
@@ -84,6 +101,11 @@ impl Stepper {
                 .map_report(|()| StepReports::default()),
             Stepper::Trackdlo(s) => s.step(input, &params.trackdlo).map_report(|r| StepReports {
                 trackdlo: Some(r),
+                ..StepReports::default()
+            }),
+            #[cfg(feature = "cdcpd2")]
+            Stepper::Cdcpd2(s) => s.step(input, &params.cdcpd2).map_report(|r| StepReports {
+                cdcpd2: Some(r),
                 ..StepReports::default()
             }),
         };

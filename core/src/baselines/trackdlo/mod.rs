@@ -33,8 +33,11 @@ use visibility::{extend_visible, node_visibility};
 pub struct TrackDloReport {
     /// The occlusion case (`None` when no node was visible).
     pub case: Option<OcclusionCase>,
-    /// Number of correspondence priors.
-    pub priors: usize,
+    /// The correspondence priors, by node index.
+    pub priors: Vec<Prior>,
+    /// The guide nodes after the pre-registration (the extended visible
+    /// nodes, in order).
+    pub guide: Vec<Vec3>,
     /// The final registration.
     pub registration: CpdLleReport,
 }
@@ -72,20 +75,38 @@ impl TrackDloState {
         }
         let visible = node_visibility(nodes, cloud, camera, params);
         let extended = extend_visible(&visible, &self.rest, params.d_vis);
+        let report = self.step_with_visibility(nodes, cloud, &extended, params);
+        (visible, report)
+    }
+
+    /// The step after visibility: pre-registration of the nodes marked in
+    /// `extended` (the visible ones with short gaps filled), priors, final
+    /// registration. Moves `nodes` in place.
+    pub fn step_with_visibility(
+        &mut self,
+        nodes: &mut [Vec3],
+        cloud: &[Vec3],
+        extended: &[bool],
+        params: &TrackDloParams,
+    ) -> TrackDloReport {
+        if self.rest.len() != nodes.len() || extended.len() != nodes.len() {
+            *self = Self::new(nodes);
+        }
         let mut guide: Vec<Vec3> = (0..nodes.len())
             .filter(|&i| extended[i])
             .map(|i| nodes[i])
             .collect();
         let idle = TrackDloReport {
             case: None,
-            priors: 0,
+            priors: Vec::new(),
+            guide: Vec::new(),
             registration: CpdLleReport {
                 iterations: 0,
                 converged: false,
             },
         };
         if guide.is_empty() {
-            return (visible, idle);
+            return idle;
         }
         let mut pre_variance = self.variance;
         let pre = CpdLleSettings {
@@ -100,7 +121,7 @@ impl TrackDloState {
             visibility_threshold: params.visibility_threshold,
         };
         cpd_lle(cloud, &mut guide, &mut pre_variance, &pre, &[], None);
-        let (case, priors) = correspondence_priors(&extended, &guide, nodes, &self.rest);
+        let (case, priors) = correspondence_priors(extended, &guide, nodes, &self.rest);
         let main = CpdLleSettings {
             beta: params.beta,
             lambda: params.lambda,
@@ -115,16 +136,14 @@ impl TrackDloState {
             &mut self.variance,
             &main,
             &priors,
-            Some(&extended),
+            Some(extended),
         );
-        (
-            visible,
-            TrackDloReport {
-                case,
-                priors: priors.len(),
-                registration,
-            },
-        )
+        TrackDloReport {
+            case,
+            priors,
+            guide,
+            registration,
+        }
     }
 }
 

@@ -414,7 +414,7 @@ mod tests {
                 position: Vec3::new(i as f64 * 0.02, 0.03, 0.6),
             })
             .collect();
-        let p = TrackDloParams::default();
+        let p = TrackDloParams::DEMO;
         let s = CpdLleSettings {
             beta: p.beta,
             lambda: p.lambda,

@@ -45,24 +45,40 @@ pub struct TrackDloParams {
 }
 
 impl Default for TrackDloParams {
-    /// TrackDLO's published evaluation values (its launch file).
+    /// TrackDLO's published evaluation values (`trackdlo_eval.launch`).
     fn default() -> Self {
-        Self {
-            beta: 0.35,
-            lambda: 50_000.0,
-            alpha: 3.0,
-            mu: 0.1,
-            max_iterations: 50,
-            tolerance: 0.0002,
-            k_vis: 50.0,
-            d_vis: 0.06,
-            visibility_threshold: 0.008,
-            dlo_pixel_width: 40.0,
-            beta_pre_proc: 3.0,
-            lambda_pre_proc: 1.0,
-            lle_weight: 10.0,
-        }
+        Self::EVALUATION
     }
+}
+
+impl TrackDloParams {
+    /// The values of upstream's evaluation launch file
+    /// (`trackdlo_eval.launch`, RMDLO/trackdlo c05921e): the defaults.
+    pub const EVALUATION: Self = Self {
+        beta: 0.5,
+        lambda: 50_000.0,
+        alpha: 3.0,
+        mu: 0.1,
+        max_iterations: 50,
+        tolerance: 0.0002,
+        k_vis: 500.0,
+        d_vis: 0.06,
+        visibility_threshold: 0.005,
+        dlo_pixel_width: 30.0,
+        beta_pre_proc: 3.0,
+        lambda_pre_proc: 1.0,
+        lle_weight: 10.0,
+    };
+
+    /// The values of upstream's demo launch file (`trackdlo.launch`), this
+    /// project's defaults until the goldens were made.
+    pub const DEMO: Self = Self {
+        beta: 0.35,
+        k_vis: 50.0,
+        visibility_threshold: 0.008,
+        dlo_pixel_width: 40.0,
+        ..Self::EVALUATION
+    };
 }
 
 impl TrackDloParams {
