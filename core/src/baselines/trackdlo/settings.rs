@@ -45,15 +45,18 @@ pub struct TrackDloParams {
 }
 
 impl Default for TrackDloParams {
-    /// TrackDLO's published evaluation values (`trackdlo_eval.launch`).
+    /// TrackDLO's published demo values (`trackdlo.launch`), the set made
+    /// for an 8 mm voxel leaf, this project's voxel size (see
+    /// `docs/algorithm-notes.md` for the evaluation set on this pipeline).
     fn default() -> Self {
-        Self::EVALUATION
+        Self::DEMO
     }
 }
 
 impl TrackDloParams {
     /// The values of upstream's evaluation launch file
-    /// (`trackdlo_eval.launch`, RMDLO/trackdlo c05921e): the defaults.
+    /// (`trackdlo_eval.launch`, RMDLO/trackdlo c05921e), made for a 5 mm
+    /// voxel leaf; the goldens of `tests/data/trackdlo-upstream` use them.
     pub const EVALUATION: Self = Self {
         beta: 0.5,
         lambda: 50_000.0,
@@ -70,8 +73,8 @@ impl TrackDloParams {
         lle_weight: 10.0,
     };
 
-    /// The values of upstream's demo launch file (`trackdlo.launch`), this
-    /// project's defaults until the goldens were made.
+    /// The values of upstream's demo launch file (`trackdlo.launch`, leaf
+    /// 8 mm): the defaults.
     pub const DEMO: Self = Self {
         beta: 0.35,
         k_vis: 50.0,
