@@ -272,6 +272,51 @@ mod tests {
     }
 
     #[test]
+    fn the_paper_preset_is_the_papers_rules_and_presets_are_found_by_name() {
+        let p = Params::paper();
+        assert_eq!(p.visibility_min_fraction, 0.0);
+        assert_eq!(
+            p.upetrack.end_displacement_weight,
+            p.upetrack.displacement_weight
+        );
+        assert_eq!(
+            p.upetrack.hidden_motion,
+            crate::upe::occlusion::HiddenMotion::Paper
+        );
+        assert!(!p.upetrack.free_space && !p.upetrack.conserve_length);
+        // Everything else is the defaults'.
+        let d = Params::default();
+        assert_eq!(
+            (p.node_count, p.visibility_radius, p.voxel_size),
+            (d.node_count, d.visibility_radius, d.voxel_size)
+        );
+        assert_eq!(
+            p.upetrack.displacement_weight,
+            d.upetrack.displacement_weight
+        );
+        assert!(p.validate().is_ok());
+        assert_eq!(Params::preset("paper"), Some(p));
+        assert_eq!(Params::preset("default"), Some(d));
+        assert_eq!(Params::preset("papers"), None);
+    }
+
+    #[test]
+    fn the_radius_is_estimated_unless_turned_off_or_the_push_is_off() {
+        assert!(Params::default().init().estimate_radius);
+        let off = Params {
+            estimate_radius: false,
+            ..Params::default()
+        };
+        assert!(!off.init().estimate_radius);
+        let no_push = Params {
+            dlo_radius: 0.0,
+            ..Params::default()
+        };
+        assert!(!no_push.init().estimate_radius);
+        assert_eq!(no_push.init().cloud.axis_offset, 0.0);
+    }
+
+    #[test]
     fn boundary_values_are_accepted_and_the_cloud_follows_the_radius() {
         let p = Params {
             visibility_radius: 1.0,

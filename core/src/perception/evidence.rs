@@ -115,6 +115,60 @@ mod tests {
     use alloc::vec;
 
     #[test]
+    fn the_window_spans_one_and_a_half_rope_radii_in_pixels() {
+        let camera = CameraIntrinsics {
+            width: 80,
+            height: 40,
+            fx: 40.0,
+            fy: 40.0,
+            cx: 40.0,
+            cy: 20.0,
+        };
+        let rgb = vec![0u8; 80 * 40 * 3];
+        let depth = vec![600u16; 80 * 40];
+        let frame = Frame::new(80, 40, &rgb, &depth, 0.001).expect("frame");
+        let mut mask = Mask::new(80, 40);
+        mask.data[20 * 80 + 46] = true;
+        let p = Vec3::new(0.0, 0.0, 0.59);
+        let sight = |radius: f64| {
+            Evidence {
+                frame: &frame,
+                mask: &mask,
+                occlusions: &[],
+                camera: &camera,
+                radius,
+            }
+            .sight(&p)
+        };
+        // 1.5 r f / z pixels, rounded up: r = 5.9 cm -> 6 px (sees the rope
+        // pixel 6 px away); r = 4.9 cm -> 5 px (does not); 1 mm -> at least 2 px.
+        assert_eq!(sight(0.059), Sight::Rope);
+        assert_eq!(sight(0.049), Sight::FreeSpace);
+        assert_eq!(sight(0.001), Sight::FreeSpace);
+        // The cap: 12 px whatever the radius.
+        mask.data[20 * 80 + 46] = false;
+        mask.data[20 * 80 + 53] = true;
+        let far = Evidence {
+            frame: &frame,
+            mask: &mask,
+            occlusions: &[],
+            camera: &camera,
+            radius: 1.0,
+        };
+        assert_eq!(far.sight(&p), Sight::FreeSpace);
+        mask.data[20 * 80 + 53] = false;
+        mask.data[20 * 80 + 52] = true;
+        let edge = Evidence {
+            frame: &frame,
+            mask: &mask,
+            occlusions: &[],
+            camera: &camera,
+            radius: 1.0,
+        };
+        assert_eq!(edge.sight(&p), Sight::Rope);
+    }
+
+    #[test]
     fn a_point_is_judged_by_what_its_pixels_show() {
         let camera = CameraIntrinsics {
             width: 40,
@@ -167,6 +221,28 @@ mod tests {
         assert_eq!(e.sight(&at(20.0, 1.0)), Sight::Unknown);
         assert_eq!(e.sight(&at(60.0, 20.0)), Sight::OutOfView);
         assert_eq!(e.sight(&Vec3::new(0.0, 0.0, -1.0)), Sight::OutOfView);
+        // The image's first and last columns are in view, one beyond is not.
+        assert_ne!(e.sight(&at(0.0, 20.0)), Sight::OutOfView);
+        assert_ne!(e.sight(&at(39.4, 20.0)), Sight::OutOfView);
+        assert_ne!(e.sight(&at(20.0, 0.0)), Sight::OutOfView);
+        assert_eq!(e.sight(&at(-0.6, 20.0)), Sight::OutOfView);
+        assert_eq!(e.sight(&at(20.0, 39.6)), Sight::OutOfView);
+        // A surface 5 mm nearer is noise, 15 mm nearer an occluder.
+        let mut near = depth.clone();
+        for x in 15..25 {
+            near[20 * 40 + x] = 585;
+            near[25 * 40 + x] = 575;
+        }
+        let frame2 = Frame::new(40, 40, &rgb, &near, 0.001).expect("frame");
+        let e2 = Evidence {
+            frame: &frame2,
+            ..e
+        };
+        assert_eq!(
+            e2.sight(&Vec3::new(0.0, (20.0 - 20.0) * 0.59 / 40.0, 0.59)),
+            Sight::FreeSpace
+        );
+        assert_eq!(e2.sight(&at(20.0, 25.0)), Sight::Occluded);
         // Below the table (behind it): the table is nearer, so it hides the point.
         let below = Vec3::new(0.0, 0.0, 0.62);
         assert_eq!(e.sight(&below), Sight::Occluded);

@@ -453,6 +453,9 @@ mod tests {
         let mut m = Mask::new(3, 2);
         m.data[5] = true;
         assert!(m.get(2, 1));
+        let mut corner = Mask::new(3, 2);
+        corner.data[0] = true;
+        assert!(corner.get(0, 0) && !corner.get(-1, 0) && !corner.get(0, -1));
         for (u, v) in [(3, 1), (2, 2), (-1, 1), (2, -1), (0, 0), (1, 1)] {
             assert!(!m.get(u, v), "({u}, {v})");
         }
@@ -476,6 +479,13 @@ mod tests {
         ] {
             assert!(!r.contains(hsv), "{hsv:?}");
         }
+        // Equal bounds are a valid (one-value) range.
+        assert!(HsvRange {
+            lower: [0, 100, 50],
+            upper: [179, 100, 50]
+        }
+        .validate()
+        .is_ok());
         // Hue 179 is the last valid one.
         assert!(HsvRange {
             lower: [0, 0, 0],

@@ -220,6 +220,68 @@ mod tests {
     }
 
     #[test]
+    fn turning_is_a_rotation_about_the_axis_through_the_centre() {
+        let c = Vec3::new(1.0, 2.0, 3.0);
+        let z = Vec3::new(0.0, 0.0, 1.0);
+        let p = turn(
+            &Vec3::new(2.0, 2.0, 3.5),
+            &c,
+            &z,
+            core::f64::consts::FRAC_PI_2,
+        );
+        assert!((p - Vec3::new(1.0, 3.0, 3.5)).norm() < 1e-12, "{p:?}");
+        assert!((TURN_STEP - 5f64.to_radians()).abs() < 1e-15);
+    }
+
+    #[test]
+    fn candidates_grow_from_no_change_to_the_chord_and_to_half_a_turn() {
+        let nodes = vec![
+            Vec3::new(0.0, 0.0, 0.6),
+            Vec3::new(1.0, 1.0, 0.6),
+            Vec3::new(2.0, 1.0, 0.6),
+            Vec3::new(3.0, 0.0, 0.6),
+        ];
+        let middle = candidates(&nodes, HiddenRun { start: 1, end: 3 });
+        assert_eq!(middle.len(), 1 + CHORD_SHARES.len());
+        assert_eq!(middle[0], nodes[1..3].to_vec());
+        // Share 1/4 of the way to the chord (y = 0), then all of it.
+        assert!((middle[1][0] - Vec3::new(1.0, 0.75, 0.6)).norm() < 1e-12);
+        assert!((middle[4][0] - Vec3::new(1.0, 0.0, 0.6)).norm() < 1e-12);
+        assert!((middle[4][1] - Vec3::new(2.0, 0.0, 0.6)).norm() < 1e-12);
+        let end = candidates(&nodes, HiddenRun { start: 2, end: 4 });
+        assert_eq!(end.len(), 1 + 2 * TURN_STEPS);
+        // +5 degrees, then -5, ..., the last: half a turn about node 1.
+        let first = end[1][0] - nodes[1];
+        assert!((libm::atan2(first.y, first.x) - TURN_STEP).abs() < 1e-12);
+        let last = end[2 * TURN_STEPS][0] - nodes[1];
+        assert!((last - Vec3::new(-1.0, 0.0, 0.0)).norm() < 1e-9, "{last:?}");
+    }
+
+    #[test]
+    fn a_run_nothing_can_clear_stays_where_it_was_and_is_counted() {
+        let s = Scene::new();
+        let frame = Frame::new(64, 48, &s.rgb, &s.depth, 0.001).expect("frame");
+        // No rectangle: the whole table is free space.
+        let e = Evidence {
+            frame: &frame,
+            mask: &s.mask,
+            occlusions: &[],
+            camera: &s.camera,
+            radius: 0.0075,
+        };
+        let mut nodes = vec![
+            at(40.0, 24.0),
+            at(36.0, 24.0),
+            at(30.0, 24.0),
+            at(26.0, 24.0),
+        ];
+        let before = nodes.clone();
+        let r = clear_free_space(&mut nodes, &[true, true, false, false], &e);
+        assert_eq!((r.found, r.left, r.runs_moved), (2, 2, 0));
+        assert_eq!(nodes, before);
+    }
+
+    #[test]
     fn a_middle_run_bulging_over_free_table_is_drawn_to_its_chord() {
         let s = Scene::new();
         let mut rects = s.rects;
@@ -250,7 +312,7 @@ mod tests {
         ];
         let known = [true, true, false, false, true, true];
         let r = clear_free_space(&mut nodes, &known, &e);
-        assert_eq!(r.left, 0, "{r:?}");
+        assert_eq!((r.found, r.left, r.runs_moved), (2, 0, 1), "{r:?}");
         assert!(nodes[2..4].iter().all(|p| e.sight(p).allows_hidden()));
         // Nothing in free space: nothing moves.
         let mut again = nodes.clone();

@@ -167,6 +167,61 @@ mod tests {
     }
 
     #[test]
+    fn points_along_a_bent_curve_land_at_exact_arc_lengths() {
+        // Segments of 1, 2 (repeated point in between) and 1, then straight on.
+        let curve = [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(1.0, 2.0, 0.0),
+            Vec3::new(2.0, 2.0, 0.0),
+        ];
+        let out = along(&curve, 6, 0.75);
+        let expect = [
+            Vec3::new(0.75, 0.0, 0.0),
+            Vec3::new(1.0, 0.5, 0.0),
+            Vec3::new(1.0, 1.25, 0.0),
+            Vec3::new(1.0, 2.0, 0.0),
+            Vec3::new(1.75, 2.0, 0.0),
+            Vec3::new(2.5, 2.0, 0.0),
+        ];
+        for (a, b) in out.iter().zip(&expect) {
+            assert!((a - b).norm() < 1e-12, "{a:?} vs {b:?}");
+        }
+        assert_eq!(along(&curve[..1], 2, 1.0), alloc::vec![curve[0]; 2]);
+    }
+
+    #[test]
+    fn the_report_gives_the_relative_change_and_both_ends_share_the_budget() {
+        // Twelve nodes 1 cm apart, rope 11 cm; both ends hidden (0-1 and 10-11)
+        // and each pushed out to 3 cm steps: 4 of the 8 cm of hidden length
+        // 4 cm are allowed (11 - 7), shared 2 : 2.
+        let mut nodes = line(12, 0.01);
+        nodes[1] = Vec3::new(-0.02, 0.0, 0.6);
+        nodes[0] = Vec3::new(-0.05, 0.0, 0.6);
+        nodes[10] = Vec3::new(0.12, 0.0, 0.6);
+        nodes[11] = Vec3::new(0.15, 0.0, 0.6);
+        let known: Vec<bool> = (0..12).map(|i| (2..10).contains(&i)).collect();
+        let r = conserve_end_lengths(&mut nodes, &known, 0.11);
+        assert_eq!(r.runs, 2);
+        // Each end: 7 cm long with its anchor segment, 2 cm allowed: 5/7.
+        assert!(
+            (r.largest_change - 5.0 / 7.0).abs() < 1e-12,
+            "{}",
+            r.largest_change
+        );
+        for (i, p) in nodes.iter().enumerate() {
+            assert!((p.x - i as f64 * 0.01).abs() < 1e-12, "node {i}: {p:?}");
+        }
+        // Nothing to do on bad inputs.
+        let before = nodes.clone();
+        assert_eq!(conserve_end_lengths(&mut nodes, &known[..11], 0.11).runs, 0);
+        assert_eq!(conserve_end_lengths(&mut nodes, &known, 0.0).runs, 0);
+        assert_eq!(conserve_end_lengths(&mut nodes, &known, f64::NAN).runs, 0);
+        assert_eq!(nodes, before);
+    }
+
+    #[test]
     fn middle_runs_and_fully_visible_ropes_are_left_alone() {
         let mut nodes = line(10, 0.01);
         nodes[5].y = 0.02;

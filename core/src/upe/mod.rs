@@ -197,3 +197,58 @@ impl TrackingStep for UpeTrackStep {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::perception::camera::CameraIntrinsics;
+    use alloc::vec::Vec;
+
+    #[test]
+    fn the_step_caps_a_hidden_end_at_the_rest_length_only_when_asked() {
+        // Ten nodes 1 cm apart; the cloud covers nodes 0-6, the tail 7-9 is
+        // hidden; the rope is known to be 8 cm long, the nodes span 9.
+        let previous: Vec<Vec3> = (0..10)
+            .map(|i| Vec3::new(i as f64 * 0.01, 0.0, 0.6))
+            .collect();
+        let cloud: Vec<Vec3> = (0..=60)
+            .map(|k| Vec3::new(k as f64 * 0.001, 0.0, 0.6))
+            .collect();
+        let visible: Vec<bool> = (0..10).map(|i| i < 7).collect();
+        let camera = CameraIntrinsics::D435I_640X480;
+        let input = |rest_length| StepInput {
+            previous: &previous,
+            cloud: &cloud,
+            visible: &visible,
+            camera: &camera,
+            evidence: None,
+            rest_length,
+        };
+        let length = |n: &[Vec3]| n.windows(2).map(|w| (w[1] - w[0]).norm()).sum::<f64>();
+        let p = UpeTrackParams::default();
+        let capped = UpeTrackStep.step(&input(Some(0.08)), &p);
+        assert!(
+            capped.report.length.runs == 1 && length(&capped.nodes) < 0.0801,
+            "{}",
+            length(&capped.nodes)
+        );
+        let free = UpeTrackStep.step(&input(None), &p);
+        assert!(
+            free.report.length.runs == 0 && length(&free.nodes) > 0.082,
+            "{}",
+            length(&free.nodes)
+        );
+        let off = UpeTrackParams {
+            conserve_length: false,
+            ..p
+        };
+        assert_eq!(
+            UpeTrackStep
+                .step(&input(Some(0.08)), &off)
+                .report
+                .length
+                .runs,
+            0
+        );
+    }
+}

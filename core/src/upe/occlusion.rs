@@ -506,6 +506,49 @@ mod tests {
     }
 
     #[test]
+    fn slide_ends_slides_the_end_runs_and_keeps_eq_6_7_in_the_middle() {
+        // A bent rope moving along and across itself, hidden at the head
+        // (0-1), in the middle (6-7) and at the tail (11).
+        let arc = |i: usize, s: f64| {
+            let t = (i as f64 * 0.03 + s) / 0.15;
+            Vec3::new(0.15 * libm::sin(t), 0.15 * (1.0 - libm::cos(t)), 0.6)
+        };
+        let prev: Vec<Vec3> = (0..12).map(|i| arc(i, 0.0)).collect();
+        let known: Vec<bool> = (0..12)
+            .map(|i| !(i < 2 || (6..8).contains(&i) || i == 11))
+            .collect();
+        let now: Vec<Vec3> = (0..12)
+            .map(|i| arc(i, 0.006) + Vec3::new(0.0, 0.0, 0.002))
+            .collect();
+        let run = |motion: HiddenMotion| {
+            let c = UpeCoefficients {
+                hidden_motion: motion,
+                end_displacement_weight: 1.0,
+                ..PAPER
+            };
+            let mut n = now.clone();
+            estimate_hidden(&mut n, &known, &prev, &c);
+            n
+        };
+        let (ends, paper, slide) = (
+            run(HiddenMotion::SlideEnds),
+            run(HiddenMotion::Paper),
+            run(HiddenMotion::Slide),
+        );
+        for i in [6, 7] {
+            assert!((ends[i] - paper[i]).norm() < 1e-15, "middle node {i}");
+            assert!(
+                (ends[i] - slide[i]).norm() > 1e-6,
+                "middle node {i}: slide and Eq. 6-7 agree"
+            );
+        }
+        for i in [0, 1] {
+            assert!((ends[i] - slide[i]).norm() < 1e-15, "head node {i}");
+            assert!((ends[i] - paper[i]).norm() > 1e-6, "head node {i}");
+        }
+    }
+
+    #[test]
     fn mismatched_lengths_change_nothing() {
         let prev: Vec<Vec3> = (0..6).map(|i| Vec3::new(i as f64, 0.0, 0.0)).collect();
         let mut nodes = prev.clone();
