@@ -135,6 +135,22 @@ pub fn is_finite(v: &Vec3) -> bool {
     v.x.is_finite() && v.y.is_finite() && v.z.is_finite()
 }
 
+/// Where the segment `a`-`b` comes nearest `p`: the parameter `t` in
+/// `[0, 1]` of the point `a + t (b - a)` (0 for a segment of no length).
+pub fn nearest_on_segment<const D: usize>(
+    p: &nalgebra::SVector<f64, D>,
+    a: &nalgebra::SVector<f64, D>,
+    b: &nalgebra::SVector<f64, D>,
+) -> f64 {
+    let ab = b - a;
+    let len2 = ab.norm_squared();
+    if len2 > 0.0 {
+        ((p - a).dot(&ab) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

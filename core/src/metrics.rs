@@ -18,14 +18,8 @@ pub fn distance_to_polyline<const D: usize>(
     let first = curve.first()?;
     let mut best = (p - first).norm_squared();
     for w in curve.windows(2) {
-        let seg = w[1] - w[0];
-        let len2 = seg.norm_squared();
-        let t = if len2 > 0.0 {
-            ((p - w[0]).dot(&seg) / len2).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        best = best.min((p - (w[0] + seg * t)).norm_squared());
+        let t = math::nearest_on_segment(p, &w[0], &w[1]);
+        best = best.min((p - (w[0] + (w[1] - w[0]) * t)).norm_squared());
     }
     Some(math::sqrt(best))
 }

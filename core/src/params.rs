@@ -16,8 +16,8 @@ use crate::perception::point_cloud::{CloudSettings, SURFACE_TO_AXIS_RATIO};
 use crate::step::Algorithm;
 pub use crate::upe::registration::MAX_EM_ITERATIONS;
 use crate::upe::UpeTrackParams;
-use crate::validation::check;
 pub use crate::validation::ParamsError;
+use crate::validation::{check, unit};
 
 /// Fewest nodes accepted: UPE needs three known nodes and one to estimate.
 pub const MIN_NODES: usize = 4;
@@ -162,12 +162,7 @@ impl Params {
             "an integer in 1..=100000",
         )?;
         let vf = self.visibility_min_fraction;
-        check(
-            "visibility_min_fraction",
-            vf,
-            (0.0..=1.0).contains(&vf),
-            "in [0, 1]",
-        )?;
+        unit("visibility_min_fraction", vf)?;
         let vx = self.voxel_size;
         check(
             "voxel_size",
@@ -196,19 +191,9 @@ impl Params {
             "at least 0 and below max_depth",
         )?;
         let f = self.reinit_length_fraction;
-        check(
-            "reinit_length_fraction",
-            f,
-            (0.0..=1.0).contains(&f),
-            "in [0, 1]",
-        )?;
+        unit("reinit_length_fraction", f)?;
         let rv = self.reinit_visible_fraction;
-        check(
-            "reinit_visible_fraction",
-            rv,
-            (0.0..=1.0).contains(&rv),
-            "in [0, 1]",
-        )?;
+        unit("reinit_visible_fraction", rv)?;
         self.upetrack.validate()?;
         self.cpd.validate()?;
         #[cfg(feature = "cdcpd2")]

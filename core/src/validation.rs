@@ -44,3 +44,23 @@ pub fn check(
         })
     }
 }
+
+/// A weight or width in `(0, 1e9]`.
+pub fn positive(name: &'static str, value: f64) -> Result<(), ParamsError> {
+    check(name, value, value > 0.0 && value <= 1e9, "in (0, 1e9]")
+}
+
+/// A weight in `[0, 1e9]`.
+pub fn non_negative(name: &'static str, value: f64) -> Result<(), ParamsError> {
+    check(name, value, (0.0..=1e9).contains(&value), "in [0, 1e9]")
+}
+
+/// A share in `[0, 1]`.
+pub fn unit(name: &'static str, value: f64) -> Result<(), ParamsError> {
+    check(name, value, (0.0..=1.0).contains(&value), "in [0, 1]")
+}
+
+/// An outlier weight in `[0, 1)`.
+pub fn below_one(name: &'static str, value: f64) -> Result<(), ParamsError> {
+    check(name, value, (0.0..1.0).contains(&value), "in [0, 1)")
+}

@@ -6,23 +6,12 @@
 use upetrack::Params;
 
 use crate::error::SequenceError;
-use crate::sequence::MAX_JSON_BYTES;
+use crate::sequence::parse_json;
 
 /// Parses and validates parameters from JSON text; `path` names the source
 /// in errors.
 pub fn parse_params(text: &str, path: &str) -> Result<Params, SequenceError> {
-    if text.len() > MAX_JSON_BYTES {
-        return Err(SequenceError::too_large(
-            path,
-            "JSON size in bytes",
-            text.len() as u64,
-            MAX_JSON_BYTES as u64,
-        ));
-    }
-    let params: Params = serde_json::from_str(text).map_err(|e| SequenceError::Json {
-        path: path.to_string(),
-        message: e.to_string(),
-    })?;
+    let params: Params = parse_json(text.as_bytes(), path)?;
     params
         .validate()
         .map_err(|e| SequenceError::invalid(path, e.to_string()))?;

@@ -112,18 +112,7 @@ pub struct DloConfig {
 impl DloConfig {
     /// Parses `dlo.json`'s bytes (`path` names it in errors) and checks it.
     pub fn parse(bytes: &[u8], path: &str) -> Result<Self, SequenceError> {
-        if bytes.len() > MAX_JSON_BYTES {
-            return Err(SequenceError::too_large(
-                path,
-                "JSON size in bytes",
-                bytes.len() as u64,
-                MAX_JSON_BYTES as u64,
-            ));
-        }
-        let config: Self = serde_json::from_slice(bytes).map_err(|e| SequenceError::Json {
-            path: path.to_string(),
-            message: e.to_string(),
-        })?;
+        let config: Self = parse_json(bytes, path)?;
         config.check(path)?;
         Ok(config)
     }
@@ -257,17 +246,24 @@ fn read_json<T: serde::de::DeserializeOwned, S: Source>(
     source: &S,
     path: &str,
 ) -> Result<T, SequenceError> {
-    let bytes = source.read(path)?;
+    parse_json(&source.read(path)?, &source.display(path))
+}
+
+/// JSON of at most [`MAX_JSON_BYTES`] parsed into `T`; `path` names it in errors.
+pub(crate) fn parse_json<T: serde::de::DeserializeOwned>(
+    bytes: &[u8],
+    path: &str,
+) -> Result<T, SequenceError> {
     if bytes.len() > MAX_JSON_BYTES {
         return Err(SequenceError::too_large(
-            source.display(path),
+            path,
             "JSON size in bytes",
             bytes.len() as u64,
             MAX_JSON_BYTES as u64,
         ));
     }
-    serde_json::from_slice(&bytes).map_err(|e| SequenceError::Json {
-        path: source.display(path),
+    serde_json::from_slice(bytes).map_err(|e| SequenceError::Json {
+        path: path.to_string(),
         message: e.to_string(),
     })
 }

@@ -25,7 +25,7 @@ use super::cpd::{matrix_to_points, points_to_matrix, solve_linear, thin_to_pair_
 use crate::math::{self, Vec3};
 use crate::perception::evidence::Evidence;
 use crate::step::{Algorithm, StepInput, StepOutput, TrackingStep};
-use crate::validation::{check, ParamsError};
+use crate::validation::{below_one, check, non_negative, positive, ParamsError};
 
 /// Most CPD iterations accepted.
 pub const MAX_CDCPD2_ITERATIONS: u32 = 1000;
@@ -95,22 +95,15 @@ impl Default for Cdcpd2Settings {
 impl Cdcpd2Settings {
     /// Checks every field (named `cdcpd2.<field>` in errors).
     pub fn validate(&self) -> Result<(), ParamsError> {
-        let positive = |name, v: f64| check(name, v, v > 0.0 && v <= 1e9, "in (0, 1e9]");
         positive("cdcpd2.beta", self.beta)?;
         positive("cdcpd2.tolerance", self.tolerance)?;
         positive("cdcpd2.initial_sigma_scale", self.initial_sigma_scale)?;
-        let non_negative = |name, v: f64| check(name, v, (0.0..=1e9).contains(&v), "in [0, 1e9]");
         non_negative("cdcpd2.alpha", self.alpha)?;
         non_negative("cdcpd2.lambda", self.lambda)?;
         non_negative("cdcpd2.zeta", self.zeta)?;
         non_negative("cdcpd2.k_vis", self.k_vis)?;
         let w = self.outlier_weight;
-        check(
-            "cdcpd2.outlier_weight",
-            w,
-            (0.0..1.0).contains(&w),
-            "in [0, 1)",
-        )?;
+        below_one("cdcpd2.outlier_weight", w)?;
         let s = self.stretch_factor;
         check(
             "cdcpd2.stretch_factor",

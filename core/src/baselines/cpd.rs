@@ -13,7 +13,7 @@ use nalgebra::DMatrix;
 
 use crate::math::{self, Vec3};
 use crate::step::{Algorithm, StepInput, StepOutput, TrackingStep};
-use crate::validation::{check, ParamsError};
+use crate::validation::{below_one, check, positive, ParamsError};
 
 /// Most `M x N` point pairs one registration accepts (the responsibility
 /// matrix has that many entries, 8 bytes each: 32 MB).
@@ -109,25 +109,10 @@ impl CpdSettings {
 impl CpdSettings {
     /// Checks every field (named `cpd.<field>` in errors).
     pub fn validate(&self) -> Result<(), ParamsError> {
-        check(
-            "cpd.beta",
-            self.beta,
-            self.beta > 0.0 && self.beta <= 1e9,
-            "in (0, 1e9]",
-        )?;
-        check(
-            "cpd.lambda",
-            self.lambda,
-            self.lambda > 0.0 && self.lambda <= 1e9,
-            "in (0, 1e9]",
-        )?;
+        positive("cpd.beta", self.beta)?;
+        positive("cpd.lambda", self.lambda)?;
         let w = self.outlier_weight;
-        check(
-            "cpd.outlier_weight",
-            w,
-            (0.0..1.0).contains(&w),
-            "in [0, 1)",
-        )?;
+        below_one("cpd.outlier_weight", w)?;
         check(
             "cpd.max_iterations",
             self.max_iterations as f64,

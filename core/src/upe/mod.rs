@@ -20,7 +20,7 @@ use resampling::resample_uniform;
 
 use crate::math::Vec3;
 use crate::step::{Algorithm, StepInput, StepOutput, TrackingStep};
-use crate::validation::{check, ParamsError};
+use crate::validation::{below_one, check, unit, ParamsError};
 
 /// UPETrack's parameters for the registration and the occlusion estimate
 /// (the visibility test and `M` are shared by every algorithm and sit in
@@ -89,7 +89,6 @@ impl Default for UpeTrackParams {
 impl UpeTrackParams {
     /// Checks every field against its documented range.
     pub fn validate(&self) -> Result<(), ParamsError> {
-        let unit = |name, v: f64| check(name, v, (0.0..=1.0).contains(&v), "in [0, 1]");
         unit("displacement_decay", self.displacement_decay)?;
         unit("curvature_retention", self.curvature_retention)?;
         unit("displacement_weight", self.displacement_weight)?;
@@ -102,7 +101,7 @@ impl UpeTrackParams {
             "in [0, 2]",
         )?;
         let w = self.outlier_weight;
-        check("outlier_weight", w, (0.0..1.0).contains(&w), "in [0, 1)")?;
+        below_one("outlier_weight", w)?;
         let t = self.em_tolerance;
         check("em_tolerance", t, t > 0.0 && t <= 1.0, "in (0, 1] metres")?;
         let it = self.em_max_iterations;

@@ -73,14 +73,8 @@ impl Curve {
                 continue;
             }
             let (a, b) = (self.points[k], self.points[k + 1]);
-            let ab = b - a;
-            let len2 = ab.norm_squared();
-            let t = if len2 > 0.0 {
-                ((p - a).dot(&ab) / len2).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            let d = (p - (a + ab * t)).norm_squared();
+            let t = math::nearest_on_segment(p, &a, &b);
+            let d = (p - (a + (b - a) * t)).norm_squared();
             if d < best.0 {
                 best = (d, self.s[k] + t * (self.s[k + 1] - self.s[k]));
             }

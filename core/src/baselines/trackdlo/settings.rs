@@ -1,6 +1,6 @@
 //! TrackDLO's parameters, with the values of its published evaluation.
 
-use crate::validation::{check, ParamsError};
+use crate::validation::{below_one, check, non_negative, positive, ParamsError};
 
 /// Most iterations accepted for each of TrackDLO's registrations.
 pub const MAX_TRACKDLO_ITERATIONS: u32 = 1000;
@@ -88,20 +88,18 @@ impl TrackDloParams {
     /// Checks every field (named `trackdlo.<field>` in errors).
     pub fn validate(&self) -> Result<(), ParamsError> {
         let t = self;
-        let positive = |name, v: f64| check(name, v, v > 0.0 && v <= 1e9, "in (0, 1e9]");
         positive("trackdlo.beta", t.beta)?;
         positive("trackdlo.lambda", t.lambda)?;
         positive("trackdlo.beta_pre_proc", t.beta_pre_proc)?;
         positive("trackdlo.lambda_pre_proc", t.lambda_pre_proc)?;
         positive("trackdlo.tolerance", t.tolerance)?;
         positive("trackdlo.visibility_threshold", t.visibility_threshold)?;
-        let non_negative = |name, v: f64| check(name, v, (0.0..=1e9).contains(&v), "in [0, 1e9]");
         non_negative("trackdlo.alpha", t.alpha)?;
         non_negative("trackdlo.k_vis", t.k_vis)?;
         non_negative("trackdlo.d_vis", t.d_vis)?;
         non_negative("trackdlo.lle_weight", t.lle_weight)?;
         non_negative("trackdlo.dlo_pixel_width", t.dlo_pixel_width)?;
-        check("trackdlo.mu", t.mu, (0.0..1.0).contains(&t.mu), "in [0, 1)")?;
+        below_one("trackdlo.mu", t.mu)?;
         let it = t.max_iterations;
         check(
             "trackdlo.max_iterations",

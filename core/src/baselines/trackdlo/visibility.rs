@@ -58,14 +58,8 @@ pub fn node_visibility(
 }
 
 fn point_segment_distance(p: &Vec2, a: &Vec2, b: &Vec2) -> f64 {
-    let ab = b - a;
-    let len2 = ab.norm_squared();
-    let t = if len2 > 0.0 {
-        ((p - a).dot(&ab) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (p - (a + ab * t)).norm()
+    let t = math::nearest_on_segment(p, a, b);
+    (p - (a + (b - a) * t)).norm()
 }
 
 /// Visible nodes with short gaps filled: the nodes between two visible nodes
