@@ -129,11 +129,27 @@ impl Params {
         }
     }
 
-    /// A named preset: `default` or `paper`.
+    /// TrackDLO with upstream's own pipeline settings
+    /// (`--params trackdlo-upstream`): its evaluation parameters, its 5 mm
+    /// voxel leaf, and the cloud left on the rope's surface (no push to the
+    /// axis, no radius estimate), as `trackdlo_node.cpp` builds it.
+    pub fn trackdlo_upstream() -> Self {
+        Self {
+            algorithm: Algorithm::Trackdlo,
+            voxel_size: 0.005,
+            dlo_radius: 0.0,
+            estimate_radius: false,
+            trackdlo: TrackDloParams::EVALUATION,
+            ..Self::default()
+        }
+    }
+
+    /// A named preset: `default`, `paper` or `trackdlo-upstream`.
     pub fn preset(name: &str) -> Option<Self> {
         match name {
             "default" => Some(Self::default()),
             "paper" => Some(Self::paper()),
+            "trackdlo-upstream" => Some(Self::trackdlo_upstream()),
             _ => None,
         }
     }
@@ -283,6 +299,13 @@ mod tests {
         assert_eq!(Params::preset("paper"), Some(p));
         assert_eq!(Params::preset("default"), Some(d));
         assert_eq!(Params::preset("papers"), None);
+        let t = Params::preset("trackdlo-upstream").expect("preset");
+        assert_eq!(
+            (t.algorithm, t.voxel_size, t.dlo_radius),
+            (Algorithm::Trackdlo, 0.005, 0.0)
+        );
+        assert_eq!(t.trackdlo, TrackDloParams::EVALUATION);
+        assert!(t.validate().is_ok());
     }
 
     #[test]
