@@ -400,6 +400,34 @@ mod tests {
     }
 
     #[test]
+    fn candidate_lists_follow_a_growing_variance() {
+        // Six nodes 1 mm apart in the middle of points spread over 20 cm:
+        // sigma^2 starts at the squared spacing (1 mm^2) and grows tenfold
+        // in the first iteration, so the candidate lists must be rebuilt for
+        // the larger reach; the result is Eq. 4-5's written out.
+        let cloud: Vec<Vec3> = (0..200)
+            .map(|k| Vec3::new(-0.1 + k as f64 * 0.001, 0.002 * libm::sin(k as f64), 0.6))
+            .collect();
+        let start: Vec<Vec3> = (0..6).map(|i| Vec3::new(i as f64 * 0.001, 0.0, 0.6)).collect();
+        let active = [true; 6];
+        let s = EmSettings {
+            outlier_weight: 0.1,
+            tolerance: 1e-9,
+            max_iterations: 6,
+            min_variance: 1e-6,
+        };
+        let (mut ours, mut reference) = (start.clone(), start.clone());
+        let r = register(&cloud, &mut ours, &active, &s);
+        let (it, var) = reference_em(&cloud, &mut reference, &active, &s);
+        assert_eq!(r.iterations, it);
+        assert!(var > 10.0 * s.min_variance, "the case must grow sigma^2: {var}");
+        assert!((r.variance - var).abs() < 1e-7 * var, "{} vs {var}", r.variance);
+        for (a, b) in ours.iter().zip(&reference) {
+            assert!((a - b).norm() < 1e-10, "{a:?} vs {b:?}");
+        }
+    }
+
+    #[test]
     fn the_optimised_em_is_eq_4_and_5_written_out() {
         let mut rng = SplitMix64::new(11);
         for case in 0..20 {
