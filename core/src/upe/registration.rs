@@ -402,9 +402,10 @@ mod tests {
     #[test]
     fn candidate_lists_follow_a_growing_variance() {
         // Six nodes 1 mm apart in the middle of points spread over 20 cm:
-        // sigma^2 starts at the squared spacing (1 mm^2) and grows tenfold
-        // in the first iteration, so the candidate lists must be rebuilt for
-        // the larger reach; the result is Eq. 4-5's written out.
+        // sigma^2 starts at the squared spacing (1 mm^2) and grows tenfold,
+        // the reach with it; the result is Eq. 4-5's written out. (The nodes
+        // move too, which also rebuilds the lists: the rebuild on growth
+        // alone is not reached here, see docs/testing.md.)
         let cloud: Vec<Vec3> = (0..200)
             .map(|k| Vec3::new(-0.1 + k as f64 * 0.001, 0.002 * libm::sin(k as f64), 0.6))
             .collect();
