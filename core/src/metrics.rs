@@ -97,6 +97,11 @@ mod tests {
             Some(5.0)
         );
         assert_eq!(distance_to_polyline(&Vec2::new(1.0, 1.0), &[]), None);
+        // A one-point curve is that point.
+        assert_eq!(
+            distance_to_polyline(&Vec2::new(4.0, 3.0), &[Vec2::new(1.0, -1.0)]),
+            Some(5.0)
+        );
     }
 
     #[test]

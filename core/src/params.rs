@@ -305,6 +305,8 @@ mod tests {
             (Algorithm::Trackdlo, 0.005, 0.0)
         );
         assert_eq!(t.trackdlo, TrackDloParams::EVALUATION);
+        // Said in the preset itself, not only implied by the zero radius.
+        assert!(!t.estimate_radius);
         assert!(t.validate().is_ok());
     }
 
@@ -343,7 +345,7 @@ mod tests {
     #[test]
     fn invalid_values_are_rejected_by_name() {
         type Case = (&'static str, fn(&mut Params));
-        let cases: [Case; 26] = [
+        let cases: [Case; 27] = [
             ("reinit_visible_fraction", |p| {
                 p.reinit_visible_fraction = -5.0
             }),
@@ -364,6 +366,7 @@ mod tests {
             ("dlo_radius", |p| p.dlo_radius = -0.001),
             ("cpd.beta", |p| p.cpd.beta = 0.0),
             ("trackdlo.mu", |p| p.trackdlo.mu = 1.0),
+            ("trackdlo.alpha", |p| p.trackdlo.alpha = -1.0),
             ("trackdlo.max_iterations", |p| p.trackdlo.max_iterations = 0),
             ("visibility_min_fraction", |p| {
                 p.visibility_min_fraction = 1.5

@@ -247,4 +247,79 @@ mod tests {
         let below = Vec3::new(0.0, 0.0, 0.62);
         assert_eq!(e.sight(&below), Sight::Occluded);
     }
+
+    #[test]
+    fn the_window_is_centred_and_stops_at_the_image_edge() {
+        let camera = CameraIntrinsics {
+            width: 80,
+            height: 40,
+            fx: 40.0,
+            fy: 40.0,
+            cx: 40.0,
+            cy: 20.0,
+        };
+        let rgb = vec![0u8; 80 * 40 * 3];
+        let mut depth = vec![600u16; 80 * 40];
+        let p = Vec3::new(0.0, 0.0, 0.59);
+        let judge = |mask: &Mask, depth: &[u16], p: &Vec3, radius: f64| {
+            let frame = Frame::new(80, 40, &rgb, depth, 0.001).expect("frame");
+            Evidence {
+                frame: &frame,
+                mask,
+                occlusions: &[],
+                camera: &camera,
+                radius,
+            }
+            .sight(p)
+        };
+        // r = 2 cm: 1.5 * 0.02 * 40 / 0.59 = 2.03 -> 3 px on every side.
+        for (x, y, inside) in [
+            (37, 20, true),
+            (36, 20, false),
+            (40, 17, true),
+            (40, 16, false),
+            (40, 23, true),
+            (40, 24, false),
+            (43, 20, true),
+            (44, 20, false),
+        ] {
+            let mut mask = Mask::new(80, 40);
+            mask.data[y * 80 + x] = true;
+            let expected = if inside {
+                Sight::Rope
+            } else {
+                Sight::FreeSpace
+            };
+            assert_eq!(
+                judge(&mask, &depth, &p, 0.02),
+                expected,
+                "rope pixel ({x}, {y})"
+            );
+        }
+        // r = 8 cm: 1.5 r f / z = 8.1 -> 9 px, so a rope pixel 9 px away is seen.
+        let mut mask = Mask::new(80, 40);
+        mask.data[20 * 80 + 49] = true;
+        assert_eq!(judge(&mask, &depth, &p, 0.08), Sight::Rope);
+        // At the last column and row the window stops at the image: the
+        // next row's first pixel (a near surface) is not read as beside it.
+        let empty = Mask::new(80, 40);
+        depth[21 * 80] = 300;
+        let right = Vec3::new(39.0 * 0.59 / 40.0, 0.0, 0.59);
+        assert_eq!(judge(&empty, &depth, &right, 0.02), Sight::FreeSpace);
+        let corner = Vec3::new(39.0 * 0.59 / 40.0, 19.0 * 0.59 / 40.0, 0.59);
+        assert_eq!(judge(&empty, &depth, &corner, 0.02), Sight::FreeSpace);
+        // A surface exactly OCCLUDER_MARGIN nearer does not hide the point;
+        // one depth unit more does.
+        let flat = vec![300u16; 80 * 40];
+        let z = 300.0 * 0.001 + OCCLUDER_MARGIN;
+        assert_eq!(
+            judge(&empty, &flat, &Vec3::new(0.0, 0.0, z), 0.02),
+            Sight::FreeSpace
+        );
+        let nearer = vec![299u16; 80 * 40];
+        assert_eq!(
+            judge(&empty, &nearer, &Vec3::new(0.0, 0.0, z), 0.02),
+            Sight::Occluded
+        );
+    }
 }

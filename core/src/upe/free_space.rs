@@ -230,6 +230,15 @@ mod tests {
             core::f64::consts::FRAC_PI_2,
         );
         assert!((p - Vec3::new(1.0, 3.0, 3.5)).norm() < 1e-12, "{p:?}");
+        // At 60 degrees: the component along the axis is kept.
+        let p = turn(
+            &Vec3::new(2.0, 2.0, 3.5),
+            &c,
+            &z,
+            core::f64::consts::FRAC_PI_3,
+        );
+        let expected = Vec3::new(1.5, 2.0 + 0.75f64.sqrt(), 3.5);
+        assert!((p - expected).norm() < 1e-12, "{p:?}");
         assert!((TURN_STEP - 5f64.to_radians()).abs() < 1e-15);
     }
 
@@ -253,6 +262,8 @@ mod tests {
         // +5 degrees, then -5, ..., the last: half a turn about node 1.
         let first = end[1][0] - nodes[1];
         assert!((libm::atan2(first.y, first.x) - TURN_STEP).abs() < 1e-12);
+        let second = end[2][0] - nodes[1];
+        assert!((libm::atan2(second.y, second.x) + TURN_STEP).abs() < 1e-12);
         let last = end[2 * TURN_STEPS][0] - nodes[1];
         assert!((last - Vec3::new(-1.0, 0.0, 0.0)).norm() < 1e-9, "{last:?}");
     }
@@ -279,6 +290,44 @@ mod tests {
         let r = clear_free_space(&mut nodes, &[true, true, false, false], &e);
         assert_eq!((r.found, r.left, r.runs_moved), (2, 2, 0));
         assert_eq!(nodes, before);
+    }
+
+    #[test]
+    fn a_run_partly_cleared_takes_the_smallest_turn_and_counts_what_is_left() {
+        let s = Scene::new();
+        // A 12 x 12 px occluder right of the anchor: no turn brings the
+        // whole tip under it; 45 degrees (the smallest) brings in one node.
+        let rects = [Rect {
+            x: 32,
+            y: 18,
+            w: 12,
+            h: 12,
+        }];
+        let frame = Frame::new(64, 48, &s.rgb, &s.depth, 0.001).expect("frame");
+        let e = Evidence {
+            frame: &frame,
+            mask: &s.mask,
+            occlusions: &rects,
+            camera: &s.camera,
+            radius: 0.0075,
+        };
+        let mut nodes = vec![
+            at(44.0, 24.0),
+            at(40.0, 24.0),
+            at(36.0, 24.0),
+            at(30.0, 24.0),
+            at(26.0, 24.0),
+            at(22.0, 24.0),
+        ];
+        let before = nodes.clone();
+        let known = [true, true, true, false, false, false];
+        let r = clear_free_space(&mut nodes, &known, &e);
+        assert_eq!((r.found, r.left, r.runs_moved), (3, 2, 1), "{r:?}");
+        let z = Vec3::new(0.0, 0.0, 1.0);
+        for k in 3..6 {
+            let expected = turn(&before[k], &before[2], &z, 9.0 * TURN_STEP);
+            assert!((nodes[k] - expected).norm() < 1e-12, "node {k}");
+        }
     }
 
     #[test]

@@ -74,7 +74,8 @@ pub fn conserve_end_lengths(nodes: &mut [Vec3], known: &[bool], rest_length: f64
     }
     let budget = rest_length - length(&nodes[from..=to]);
     let ends: Vec<(usize, bool)> = [
-        head.map(|r| (r.end - r.start, true)),
+        // A head run starts at node 0: its node count is its end.
+        head.map(|r| (r.end, true)),
         tail.map(|r| (r.end - r.start, false)),
     ]
     .into_iter()
@@ -100,9 +101,8 @@ pub fn conserve_end_lengths(nodes: &mut [Vec3], known: &[bool], rest_length: f64
         if !placed.iter().all(math::is_finite) {
             continue;
         }
-        if old > 0.0 {
-            report.largest_change = report.largest_change.max((share - old).abs() / old);
-        }
+        // old > share >= 0 here, so the ratio is finite.
+        report.largest_change = report.largest_change.max((share - old).abs() / old);
         report.runs += 1;
         if at_head {
             for (k, p) in placed.into_iter().enumerate() {
@@ -219,6 +219,24 @@ mod tests {
         assert_eq!(conserve_end_lengths(&mut nodes, &known, 0.0).runs, 0);
         assert_eq!(conserve_end_lengths(&mut nodes, &known, f64::NAN).runs, 0);
         assert_eq!(nodes, before);
+    }
+
+    #[test]
+    fn a_single_visible_node_anchors_both_ends() {
+        // Five nodes, only the middle one seen, both ends stretched to 2 cm
+        // steps; the rope is 4 cm long: 2 cm for each end.
+        let mut nodes: Vec<Vec3> = (0..5)
+            .map(|i| Vec3::new((i as f64 - 2.0) * 0.02, 0.0, 0.6))
+            .collect();
+        let known = [false, false, true, false, false];
+        let r = conserve_end_lengths(&mut nodes, &known, 0.04);
+        assert_eq!(r.runs, 2);
+        for (i, p) in nodes.iter().enumerate() {
+            assert!(
+                (p.x - (i as f64 - 2.0) * 0.01).abs() < 1e-12,
+                "node {i}: {p:?}"
+            );
+        }
     }
 
     #[test]

@@ -250,4 +250,74 @@ mod tests {
             0
         );
     }
+
+    #[test]
+    fn the_step_moves_a_hidden_end_out_of_free_space_only_when_asked() {
+        use crate::perception::evidence::Evidence;
+        use crate::perception::frame::Frame;
+        use crate::perception::segmentation::{Mask, Rect};
+        // A table at 0.6 m, an occlusion rectangle over the right half; the
+        // visible nodes lie under it, the hidden tip sticks out
+        // over free table to the left.
+        let camera = CameraIntrinsics {
+            width: 64,
+            height: 48,
+            fx: 60.0,
+            fy: 60.0,
+            cx: 32.0,
+            cy: 24.0,
+        };
+        let rgb = alloc::vec![0u8; 64 * 48 * 3];
+        let depth = alloc::vec![600u16; 64 * 48];
+        let frame = Frame::new(64, 48, &rgb, &depth, 0.001).expect("frame");
+        let mask = Mask::new(64, 48);
+        let rects = [Rect {
+            x: 32,
+            y: 0,
+            w: 32,
+            h: 48,
+        }];
+        let evidence = Evidence {
+            frame: &frame,
+            mask: &mask,
+            occlusions: &rects,
+            camera: &camera,
+            radius: 0.0075,
+        };
+        let at = |u: f64| Vec3::new((u - 32.0) * 0.59 / 60.0, 0.0, 0.59);
+        let previous: Vec<Vec3> = [44.0, 40.0, 36.0, 30.0, 26.0, 22.0]
+            .iter()
+            .map(|&u| at(u))
+            .collect();
+        let cloud: Vec<Vec3> = (0..=40).map(|k| at(36.0 + k as f64 * 0.2)).collect();
+        let visible = [true, true, true, false, false, false];
+        let input = StepInput {
+            previous: &previous,
+            cloud: &cloud,
+            visible: &visible,
+            camera: &camera,
+            evidence: Some(evidence),
+            rest_length: None,
+        };
+        let p = UpeTrackParams::default();
+        let on = UpeTrackStep.step(&input, &p);
+        assert_eq!(
+            (on.report.free_space.found, on.report.free_space.runs_moved),
+            (3, 1),
+            "{:?}",
+            on.report.free_space
+        );
+        assert!(on.nodes[3..]
+            .iter()
+            .all(|n| evidence.sight(n).allows_hidden()));
+        let off = UpeTrackParams {
+            free_space: false,
+            ..p
+        };
+        let kept = UpeTrackStep.step(&input, &off);
+        assert_eq!(kept.report.free_space.runs_moved, 0);
+        assert!(kept.nodes[3..]
+            .iter()
+            .any(|n| !evidence.sight(n).allows_hidden()));
+    }
 }

@@ -485,6 +485,18 @@ mod tests {
             "{} vs {expect}",
             nodes[3].y
         );
+        // gamma = 0: only the adjacent known nodes count (0^0 = 1).
+        let c0 = UpeCoefficients {
+            displacement_decay: 0.0,
+            ..c
+        };
+        let mut nodes0 = prev.clone();
+        for (i, dy) in [(0, 1.0), (2, 2.0), (5, 4.0)] {
+            nodes0[i].y += dy;
+        }
+        estimate_hidden(&mut nodes0, &known, &prev, &c0);
+        let ys: Vec<f64> = [1, 3, 4].iter().map(|&i| nodes0[i].y).collect();
+        assert_eq!(ys, vec![1.5, 2.0, 4.0]);
     }
 
     #[test]
@@ -542,9 +554,9 @@ mod tests {
                 "middle node {i}: slide and Eq. 6-7 agree"
             );
         }
-        for i in [0, 1] {
-            assert!((ends[i] - slide[i]).norm() < 1e-15, "head node {i}");
-            assert!((ends[i] - paper[i]).norm() > 1e-6, "head node {i}");
+        for i in [0, 1, 11] {
+            assert!((ends[i] - slide[i]).norm() < 1e-15, "end node {i}");
+            assert!((ends[i] - paper[i]).norm() > 1e-6, "end node {i}");
         }
     }
 

@@ -409,7 +409,9 @@ mod tests {
         let cloud: Vec<Vec3> = (0..200)
             .map(|k| Vec3::new(-0.1 + k as f64 * 0.001, 0.002 * libm::sin(k as f64), 0.6))
             .collect();
-        let start: Vec<Vec3> = (0..6).map(|i| Vec3::new(i as f64 * 0.001, 0.0, 0.6)).collect();
+        let start: Vec<Vec3> = (0..6)
+            .map(|i| Vec3::new(i as f64 * 0.001, 0.0, 0.6))
+            .collect();
         let active = [true; 6];
         let s = EmSettings {
             outlier_weight: 0.1,
@@ -421,8 +423,15 @@ mod tests {
         let r = register(&cloud, &mut ours, &active, &s);
         let (it, var) = reference_em(&cloud, &mut reference, &active, &s);
         assert_eq!(r.iterations, it);
-        assert!(var > 10.0 * s.min_variance, "the case must grow sigma^2: {var}");
-        assert!((r.variance - var).abs() < 1e-7 * var, "{} vs {var}", r.variance);
+        assert!(
+            var > 10.0 * s.min_variance,
+            "the case must grow sigma^2: {var}"
+        );
+        assert!(
+            (r.variance - var).abs() < 1e-7 * var,
+            "{} vs {var}",
+            r.variance
+        );
         for (a, b) in ours.iter().zip(&reference) {
             assert!((a - b).norm() < 1e-10, "{a:?} vs {b:?}");
         }
