@@ -169,10 +169,11 @@ pub fn slide_estimates(
         };
         for i in run.start..run.end {
             let across = match (left, right, &ma, &mb) {
-                (Some(a), Some(b), Some(ma), Some(mb)) => {
-                    let span = sigma(b) - sigma(a);
+                (Some(_), Some(b), Some(ma), Some(mb)) => {
+                    // A middle run's curve starts at its left anchor (sigma 0).
+                    let span = sigma(b);
                     let lambda = if span > math::LENGTH_EPSILON {
-                        (sigma(i) - sigma(a)) / span
+                        sigma(i) / span
                     } else {
                         0.5
                     };
@@ -280,5 +281,140 @@ mod tests {
         for (k, expect) in [0.0075, 0.005, 0.0025].iter().enumerate() {
             assert!((y[k] - expect).abs() < 1e-12, "node {}: {}", k + 4, y[k]);
         }
+    }
+
+    /// A U of unit sides, (0,0) -> (1,0) -> (1,1) -> (0,1) -> (0,2), moved by `x0` in x.
+    fn u_curve(x0: f64) -> Curve {
+        Curve::new(vec![
+            Vec3::new(x0, 0.0, 0.0),
+            Vec3::new(x0 + 1.0, 0.0, 0.0),
+            Vec3::new(x0 + 1.0, 1.0, 0.0),
+            Vec3::new(x0, 1.0, 0.0),
+            Vec3::new(x0, 2.0, 0.0),
+        ])
+    }
+
+    #[test]
+    fn projection_looks_only_within_its_reach_of_arc_length() {
+        let c = u_curve(0.0);
+        let p = |x: f64, y: f64| Vec3::new(x, y, 0.0);
+        // Nearest overall is the far side of the U (s = 2.9), outside the reach.
+        assert_eq!(c.project(&p(0.1, 0.6), 0.05, 0.5), 0.1);
+        assert_eq!(c.project(&p(0.1, 0.6), 0.05, 5.0), 2.9);
+        // A segment starting exactly at near + reach is still looked at,
+        // as is one ending exactly at near - reach.
+        assert_eq!(c.project(&p(1.2, 0.5), 0.5, 0.5), 1.5);
+        assert_eq!(c.project(&p(0.5, -0.1), 1.5, 0.5), 0.5);
+        // Of the segments in reach, the nearest wins; on a tie the first.
+        assert_eq!(c.project(&p(1.2, 0.5), 1.0, 2.0), 1.5);
+        assert_eq!(c.project(&p(0.5, 0.5), 1.5, 5.0), 0.5);
+        // Nothing in reach: where it started.
+        assert_eq!(c.project(&p(0.5, 0.5), 10.0, 0.5), 10.0);
+    }
+
+    #[test]
+    fn a_curve_is_evaluated_along_its_segments_and_straight_on_past_its_ends() {
+        let c = u_curve(0.0);
+        let at = |s: f64| {
+            let q = c.at(s);
+            (q.x, q.y)
+        };
+        assert_eq!(at(0.25), (0.25, 0.0));
+        assert_eq!(at(1.5), (1.0, 0.5));
+        assert_eq!(at(2.75), (0.25, 1.0));
+        assert_eq!(at(-0.5), (-0.5, 0.0));
+        assert_eq!(at(4.5), (0.0, 2.5));
+        assert_eq!(
+            Curve::new(vec![Vec3::new(1.0, 2.0, 3.0)]).at(5.0),
+            Vec3::new(1.0, 2.0, 3.0)
+        );
+    }
+
+    #[test]
+    fn an_anchor_slides_no_farther_than_it_moved() {
+        // The anchor at s = 0.5 moves to 0.9 above it: the far side of the U
+        // (0.1 away) is beyond its reach of 0.9; the near side (0.5 away) is
+        // within it. Far from the origin, so the reach must come from the
+        // anchor's displacement and not its position.
+        let c = u_curve(10.0);
+        let m = anchor_motion(&c, 0.5, &Vec3::new(10.5, 0.9, 0.0));
+        assert!((m.slide - 1.4).abs() < 1e-12, "{}", m.slide);
+        assert!((m.across - Vec3::new(-0.5, 0.0, 0.0)).norm() < 1e-12);
+    }
+
+    #[test]
+    fn a_middle_run_slides_by_its_anchors_mean_and_blends_what_is_across() {
+        let prev: Vec<Vec3> = (0..10)
+            .map(|i| Vec3::new(i as f64 * 0.02, 0.0, 0.6))
+            .collect();
+        let known: Vec<bool> = (0..10).map(|i| !(4..7).contains(&i)).collect();
+        // Left part: 1 cm along and 1 cm across; right part 0.5 cm back,
+        // -0.4 cm across (each anchor slides into the run, within its curve).
+        let mut now = prev.clone();
+        for (i, p) in now.iter_mut().enumerate() {
+            let d = if i < 4 {
+                (0.01, 0.01)
+            } else {
+                (-0.005, -0.004)
+            };
+            p.x += d.0;
+            p.y += d.1;
+        }
+        let est = slide_estimates(&now, &known, &prev, 0.8);
+        for i in 4..7 {
+            let y = est[i].expect("estimated");
+            let lambda = (i - 3) as f64 / 4.0;
+            let expected = Vec3::new(
+                i as f64 * 0.02 + 0.0025,
+                0.01 * (1.0 - lambda) - 0.004 * lambda,
+                0.6,
+            );
+            assert!((y - expected).norm() < 1e-12, "node {i}: {y:?}");
+        }
+    }
+
+    #[test]
+    fn an_end_run_moved_across_fades_by_gamma_per_node_from_its_anchor() {
+        let prev: Vec<Vec3> = (0..10)
+            .map(|i| Vec3::new(i as f64 * 0.02, 0.0, 0.6))
+            .collect();
+        let mut now = prev.clone();
+        for p in &mut now {
+            p.y += 0.01;
+        }
+        // Head hidden (0-2, anchor 3) and tail hidden (7-9, anchor 6).
+        let known: Vec<bool> = (0..10).map(|i| (3..7).contains(&i)).collect();
+        let est = slide_estimates(&now, &known, &prev, 0.8);
+        for (i, share) in [(2, 1.0), (1, 0.8), (0, 0.64), (7, 1.0), (8, 0.8), (9, 0.64)] {
+            let y = est[i].expect("estimated");
+            let expected = Vec3::new(i as f64 * 0.02, 0.01 * share, 0.6);
+            assert!((y - expected).norm() < 1e-12, "node {i}: {y:?}");
+        }
+    }
+
+    #[test]
+    fn a_hidden_head_pulled_along_follows_the_path_of_three_borrowed_nodes() {
+        // Only node 0 hidden; the rope is pulled 5 cm (2.5 node spacings)
+        // along its arc towards the tail. The head lands on the arc, which
+        // it can only do if the curve reaches three nodes past its anchor.
+        let prev = arc(12, 0.0);
+        let now = arc(12, 0.05);
+        let known: Vec<bool> = (0..12).map(|i| i > 0).collect();
+        let est = slide_estimates(&now, &known, &prev, 0.8);
+        let y = est[0].expect("estimated");
+        // Within the chords' sagitta (0.5 mm).
+        assert!((y - now[0]).norm() < 6e-4, "{}", (y - now[0]).norm());
+    }
+
+    #[test]
+    fn mismatched_lengths_give_no_estimates() {
+        let prev = arc(6, 0.0);
+        let known = [true, false, true, true, true, true];
+        assert!(slide_estimates(&prev, &known, &prev[..5], 0.8)
+            .iter()
+            .all(Option::is_none));
+        assert!(slide_estimates(&prev, &known[..5], &prev, 0.8)
+            .iter()
+            .all(Option::is_none));
     }
 }
