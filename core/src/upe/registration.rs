@@ -404,8 +404,8 @@ mod tests {
         // Six nodes 1 mm apart in the middle of points spread over 20 cm:
         // sigma^2 starts at the squared spacing (1 mm^2) and grows tenfold,
         // the reach with it; the result is Eq. 4-5's written out. (The nodes
-        // move too, which also rebuilds the lists: the rebuild on growth
-        // alone is not reached here, see docs/testing.md.)
+        // move too, which also rebuilds the lists; the next test isolates
+        // the rebuild on growth.)
         let cloud: Vec<Vec3> = (0..200)
             .map(|k| Vec3::new(-0.1 + k as f64 * 0.001, 0.002 * libm::sin(k as f64), 0.6))
             .collect();
@@ -435,6 +435,40 @@ mod tests {
         for (a, b) in ours.iter().zip(&reference) {
             assert!((a - b).norm() < 1e-10, "{a:?} vs {b:?}");
         }
+    }
+
+    #[test]
+    fn candidate_lists_are_rebuilt_when_only_the_variance_grows() {
+        // Two nodes 1 mm apart between four points, 6 mm above and below and
+        // 20 mm left and right. sigma^2 starts at the squared spacing; the
+        // nodes meet in the middle (less than the margin, so that alone
+        // rebuilds nothing), then sigma^2 grows and the far points come
+        // within reach: only the rebuild on growth brings them in.
+        let cloud = [
+            Vec3::new(0.0, 0.006, 0.6),
+            Vec3::new(0.0, -0.006, 0.6),
+            Vec3::new(0.02, 0.0, 0.6),
+            Vec3::new(-0.02, 0.0, 0.6),
+        ];
+        let start = [Vec3::new(-0.0005, 0.0, 0.6), Vec3::new(0.0005, 0.0, 0.6)];
+        let active = [true; 2];
+        let s = EmSettings {
+            outlier_weight: 0.1,
+            tolerance: 1e-9,
+            max_iterations: 30,
+            min_variance: 1e-8,
+        };
+        let (mut ours, mut reference) = (start, start);
+        let r = register(&cloud, &mut ours, &active, &s);
+        let (it, var) = reference_em(&cloud, &mut reference, &active, &s);
+        assert_eq!(r.iterations, it);
+        // Without the far points sigma^2 would stay at 1.2e-5.
+        assert!(var > 5e-5, "the case must bring in the far points: {var}");
+        assert!(
+            (r.variance - var).abs() < 1e-9 * var,
+            "{} vs {var}",
+            r.variance
+        );
     }
 
     #[test]

@@ -90,7 +90,8 @@ impl Curve {
         // The segment holding sigma, the end ones extended to infinity.
         let k = match self.s.iter().position(|&x| x > sigma) {
             Some(0) => 0,
-            Some(k) => (k - 1).min(n - 2),
+            // k <= n - 1, so the segment k - 1 exists.
+            Some(k) => k - 1,
             None => n - 2,
         };
         let (a, b) = (self.points[k], self.points[k + 1]);
