@@ -109,93 +109,114 @@ impl Evidence<'_> {
     }
 }
 
+/// A scene for tests: a flat table seen straight on, no rope pixels.
+#[cfg(test)]
+pub(crate) mod fixture {
+    use super::Evidence;
+    use crate::math::Vec3;
+    use crate::perception::camera::CameraIntrinsics;
+    use crate::perception::frame::Frame;
+    use crate::perception::segmentation::{Mask, Rect};
+    use alloc::vec::Vec;
+
+    /// A `width` x `height` camera of focal `focal` px, principal point at
+    /// the centre, over a table at `depth` mm (1 mm depth units).
+    pub struct Table {
+        pub camera: CameraIntrinsics,
+        pub rgb: Vec<u8>,
+        pub depth: Vec<u16>,
+        pub mask: Mask,
+    }
+
+    impl Table {
+        pub fn new(width: u32, height: u32, focal: f64, depth: u16) -> Self {
+            let n = (width * height) as usize;
+            Self {
+                camera: CameraIntrinsics {
+                    width,
+                    height,
+                    fx: focal,
+                    fy: focal,
+                    cx: width as f64 / 2.0,
+                    cy: height as f64 / 2.0,
+                },
+                rgb: alloc::vec![0; n * 3],
+                depth: alloc::vec![depth; n],
+                mask: Mask::new(width, height),
+            }
+        }
+
+        pub fn frame(&self) -> Frame<'_> {
+            let c = &self.camera;
+            Frame::new(c.width, c.height, &self.rgb, &self.depth, 0.001).expect("frame")
+        }
+
+        pub fn evidence<'a>(
+            &'a self,
+            frame: &'a Frame<'a>,
+            occlusions: &'a [Rect],
+            radius: f64,
+        ) -> Evidence<'a> {
+            Evidence {
+                frame,
+                mask: &self.mask,
+                occlusions,
+                camera: &self.camera,
+                radius,
+            }
+        }
+
+        /// The point `z` metres away that projects to pixel (u, v).
+        pub fn at(&self, u: f64, v: f64, z: f64) -> Vec3 {
+            let c = &self.camera;
+            Vec3::new((u - c.cx) * z / c.fx, (v - c.cy) * z / c.fy, z)
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
+    use super::fixture::Table;
     use super::*;
-    use alloc::vec;
+    use crate::perception::segmentation::Mask;
 
     #[test]
     fn the_window_spans_one_and_a_half_rope_radii_in_pixels() {
-        let camera = CameraIntrinsics {
-            width: 80,
-            height: 40,
-            fx: 40.0,
-            fy: 40.0,
-            cx: 40.0,
-            cy: 20.0,
-        };
-        let rgb = vec![0u8; 80 * 40 * 3];
-        let depth = vec![600u16; 80 * 40];
-        let frame = Frame::new(80, 40, &rgb, &depth, 0.001).expect("frame");
-        let mut mask = Mask::new(80, 40);
-        mask.data[20 * 80 + 46] = true;
+        let mut t = Table::new(80, 40, 40.0, 600);
         let p = Vec3::new(0.0, 0.0, 0.59);
-        let sight = |radius: f64| {
-            Evidence {
-                frame: &frame,
-                mask: &mask,
-                occlusions: &[],
-                camera: &camera,
-                radius,
-            }
-            .sight(&p)
-        };
+        let sight = |t: &Table, radius: f64| t.evidence(&t.frame(), &[], radius).sight(&p);
+        t.mask.data[20 * 80 + 46] = true;
         // 1.5 r f / z pixels, rounded up: r = 5.9 cm -> 6 px (sees the rope
         // pixel 6 px away); r = 4.9 cm -> 5 px (does not); 1 mm -> at least 2 px.
-        assert_eq!(sight(0.059), Sight::Rope);
-        assert_eq!(sight(0.049), Sight::FreeSpace);
-        assert_eq!(sight(0.001), Sight::FreeSpace);
+        assert_eq!(sight(&t, 0.059), Sight::Rope);
+        assert_eq!(sight(&t, 0.049), Sight::FreeSpace);
+        assert_eq!(sight(&t, 0.001), Sight::FreeSpace);
         // The cap: 12 px whatever the radius.
-        mask.data[20 * 80 + 46] = false;
-        mask.data[20 * 80 + 53] = true;
-        let far = Evidence {
-            frame: &frame,
-            mask: &mask,
-            occlusions: &[],
-            camera: &camera,
-            radius: 1.0,
-        };
-        assert_eq!(far.sight(&p), Sight::FreeSpace);
-        mask.data[20 * 80 + 53] = false;
-        mask.data[20 * 80 + 52] = true;
-        let edge = Evidence {
-            frame: &frame,
-            mask: &mask,
-            occlusions: &[],
-            camera: &camera,
-            radius: 1.0,
-        };
-        assert_eq!(edge.sight(&p), Sight::Rope);
+        t.mask.data[20 * 80 + 46] = false;
+        t.mask.data[20 * 80 + 53] = true;
+        assert_eq!(sight(&t, 1.0), Sight::FreeSpace);
+        t.mask.data[20 * 80 + 53] = false;
+        t.mask.data[20 * 80 + 52] = true;
+        assert_eq!(sight(&t, 1.0), Sight::Rope);
     }
 
     #[test]
     fn a_point_is_judged_by_what_its_pixels_show() {
-        let camera = CameraIntrinsics {
-            width: 40,
-            height: 40,
-            fx: 40.0,
-            fy: 40.0,
-            cx: 20.0,
-            cy: 20.0,
-        };
         // A table at 0.6 m; a box at 0.5 m over columns 30..40; no depth in
         // rows 0..5; rope pixels at column 5.
-        let rgb = vec![0u8; 40 * 40 * 3];
-        let mut depth = vec![600u16; 40 * 40];
+        let mut t = Table::new(40, 40, 40.0, 600);
         for y in 0..40 {
             for x in 30..40 {
-                depth[y * 40 + x] = 500;
+                t.depth[y * 40 + x] = 500;
             }
         }
         for x in 0..40 {
             for y in 0..5 {
-                depth[y * 40 + x] = 0;
+                t.depth[y * 40 + x] = 0;
             }
         }
-        let frame = Frame::new(40, 40, &rgb, &depth, 0.001).expect("frame");
-        let mut mask = Mask::new(40, 40);
         for y in 0..40 {
-            mask.data[y * 40 + 5] = true;
+            t.mask.data[y * 40 + 5] = true;
         }
         let rect = [Rect {
             x: 15,
@@ -203,16 +224,10 @@ mod tests {
             w: 5,
             h: 5,
         }];
-        let e = Evidence {
-            frame: &frame,
-            mask: &mask,
-            occlusions: &rect,
-            camera: &camera,
-            radius: 0.0075,
-        };
+        let frame = t.frame();
+        let e = t.evidence(&frame, &rect, 0.0075);
         // A pixel at (u, v) for a point 0.59 m away, just above the table.
-        let at =
-            |u: f64, v: f64| Vec3::new((u - 20.0) * 0.59 / 40.0, (v - 20.0) * 0.59 / 40.0, 0.59);
+        let at = |u: f64, v: f64| t.at(u, v, 0.59);
         assert_eq!(e.sight(&at(20.0, 20.0)), Sight::FreeSpace);
         assert!(!e.sight(&at(20.0, 20.0)).allows_hidden());
         assert_eq!(e.sight(&at(35.0, 20.0)), Sight::Occluded);
@@ -227,51 +242,27 @@ mod tests {
         assert_ne!(e.sight(&at(20.0, 0.0)), Sight::OutOfView);
         assert_eq!(e.sight(&at(-0.6, 20.0)), Sight::OutOfView);
         assert_eq!(e.sight(&at(20.0, 39.6)), Sight::OutOfView);
-        // A surface 5 mm nearer is noise, 15 mm nearer an occluder.
-        let mut near = depth.clone();
-        for x in 15..25 {
-            near[20 * 40 + x] = 585;
-            near[25 * 40 + x] = 575;
-        }
-        let frame2 = Frame::new(40, 40, &rgb, &near, 0.001).expect("frame");
-        let e2 = Evidence {
-            frame: &frame2,
-            ..e
-        };
-        assert_eq!(
-            e2.sight(&Vec3::new(0.0, (20.0 - 20.0) * 0.59 / 40.0, 0.59)),
-            Sight::FreeSpace
-        );
-        assert_eq!(e2.sight(&at(20.0, 25.0)), Sight::Occluded);
         // Below the table (behind it): the table is nearer, so it hides the point.
-        let below = Vec3::new(0.0, 0.0, 0.62);
-        assert_eq!(e.sight(&below), Sight::Occluded);
+        assert_eq!(e.sight(&Vec3::new(0.0, 0.0, 0.62)), Sight::Occluded);
+        // A surface 5 mm nearer is noise, 15 mm nearer an occluder.
+        let mut near = Table::new(40, 40, 40.0, 600);
+        near.depth.clone_from(&t.depth);
+        near.mask = t.mask.clone();
+        for x in 15..25 {
+            near.depth[20 * 40 + x] = 585;
+            near.depth[25 * 40 + x] = 575;
+        }
+        let frame2 = near.frame();
+        let e2 = near.evidence(&frame2, &rect, 0.0075);
+        assert_eq!(e2.sight(&at(20.0, 20.0)), Sight::FreeSpace);
+        assert_eq!(e2.sight(&at(20.0, 25.0)), Sight::Occluded);
     }
 
     #[test]
     fn the_window_is_centred_and_stops_at_the_image_edge() {
-        let camera = CameraIntrinsics {
-            width: 80,
-            height: 40,
-            fx: 40.0,
-            fy: 40.0,
-            cx: 40.0,
-            cy: 20.0,
-        };
-        let rgb = vec![0u8; 80 * 40 * 3];
-        let mut depth = vec![600u16; 80 * 40];
+        let mut t = Table::new(80, 40, 40.0, 600);
+        let sight = |t: &Table, p: &Vec3| t.evidence(&t.frame(), &[], 0.02).sight(p);
         let p = Vec3::new(0.0, 0.0, 0.59);
-        let judge = |mask: &Mask, depth: &[u16], p: &Vec3, radius: f64| {
-            let frame = Frame::new(80, 40, &rgb, depth, 0.001).expect("frame");
-            Evidence {
-                frame: &frame,
-                mask,
-                occlusions: &[],
-                camera: &camera,
-                radius,
-            }
-            .sight(p)
-        };
         // r = 2 cm: 1.5 * 0.02 * 40 / 0.59 = 2.03 -> 3 px on every side.
         for (x, y, inside) in [
             (37, 20, true),
@@ -283,43 +274,31 @@ mod tests {
             (43, 20, true),
             (44, 20, false),
         ] {
-            let mut mask = Mask::new(80, 40);
-            mask.data[y * 80 + x] = true;
+            t.mask = Mask::new(80, 40);
+            t.mask.data[y * 80 + x] = true;
             let expected = if inside {
                 Sight::Rope
             } else {
                 Sight::FreeSpace
             };
-            assert_eq!(
-                judge(&mask, &depth, &p, 0.02),
-                expected,
-                "rope pixel ({x}, {y})"
-            );
+            assert_eq!(sight(&t, &p), expected, "rope pixel ({x}, {y})");
         }
         // r = 8 cm: 1.5 r f / z = 8.1 -> 9 px, so a rope pixel 9 px away is seen.
-        let mut mask = Mask::new(80, 40);
-        mask.data[20 * 80 + 49] = true;
-        assert_eq!(judge(&mask, &depth, &p, 0.08), Sight::Rope);
+        t.mask = Mask::new(80, 40);
+        t.mask.data[20 * 80 + 49] = true;
+        assert_eq!(t.evidence(&t.frame(), &[], 0.08).sight(&p), Sight::Rope);
         // At the last column and row the window stops at the image: the
         // next row's first pixel (a near surface) is not read as beside it.
-        let empty = Mask::new(80, 40);
-        depth[21 * 80] = 300;
-        let right = Vec3::new(39.0 * 0.59 / 40.0, 0.0, 0.59);
-        assert_eq!(judge(&empty, &depth, &right, 0.02), Sight::FreeSpace);
-        let corner = Vec3::new(39.0 * 0.59 / 40.0, 19.0 * 0.59 / 40.0, 0.59);
-        assert_eq!(judge(&empty, &depth, &corner, 0.02), Sight::FreeSpace);
+        t.mask = Mask::new(80, 40);
+        t.depth[21 * 80] = 300;
+        assert_eq!(sight(&t, &t.at(79.0, 20.0, 0.59)), Sight::FreeSpace);
+        assert_eq!(sight(&t, &t.at(79.0, 39.0, 0.59)), Sight::FreeSpace);
         // A surface exactly OCCLUDER_MARGIN nearer does not hide the point;
         // one depth unit more does.
-        let flat = vec![300u16; 80 * 40];
         let z = 300.0 * 0.001 + OCCLUDER_MARGIN;
-        assert_eq!(
-            judge(&empty, &flat, &Vec3::new(0.0, 0.0, z), 0.02),
-            Sight::FreeSpace
-        );
-        let nearer = vec![299u16; 80 * 40];
-        assert_eq!(
-            judge(&empty, &nearer, &Vec3::new(0.0, 0.0, z), 0.02),
-            Sight::Occluded
-        );
+        let flat = Table::new(80, 40, 40.0, 300);
+        assert_eq!(sight(&flat, &Vec3::new(0.0, 0.0, z)), Sight::FreeSpace);
+        let nearer = Table::new(80, 40, 40.0, 299);
+        assert_eq!(sight(&nearer, &Vec3::new(0.0, 0.0, z)), Sight::Occluded);
     }
 }

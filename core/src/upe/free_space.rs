@@ -141,61 +141,33 @@ pub fn clear_free_space(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::perception::camera::CameraIntrinsics;
-    use crate::perception::frame::Frame;
-    use crate::perception::segmentation::{Mask, Rect};
+    use crate::perception::evidence::fixture::Table;
+    use crate::perception::segmentation::Rect;
     use alloc::vec;
 
-    /// A table at 0.6 m seen by a 64 x 48 camera with an occlusion
-    /// rectangle over its right half.
-    struct Scene {
-        camera: CameraIntrinsics,
-        rgb: Vec<u8>,
-        depth: Vec<u16>,
-        mask: Mask,
-        rects: [Rect; 1],
+    /// A table at 0.6 m seen by a 64 x 48 camera.
+    fn table() -> Table {
+        Table::new(64, 48, 60.0, 600)
     }
 
-    impl Scene {
-        fn new() -> Self {
-            Self {
-                camera: CameraIntrinsics {
-                    width: 64,
-                    height: 48,
-                    fx: 60.0,
-                    fy: 60.0,
-                    cx: 32.0,
-                    cy: 24.0,
-                },
-                rgb: vec![0; 64 * 48 * 3],
-                depth: vec![600; 64 * 48],
-                mask: Mask::new(64, 48),
-                rects: [Rect {
-                    x: 32,
-                    y: 0,
-                    w: 32,
-                    h: 48,
-                }],
-            }
-        }
-    }
+    /// An occlusion rectangle over the right half of the image.
+    const RIGHT_HALF: [Rect; 1] = [Rect {
+        x: 32,
+        y: 0,
+        w: 32,
+        h: 48,
+    }];
 
     /// A point on the table plane (just above it) at pixel (u, v).
     fn at(u: f64, v: f64) -> Vec3 {
-        Vec3::new((u - 32.0) * 0.59 / 60.0, (v - 24.0) * 0.59 / 60.0, 0.59)
+        table().at(u, v, 0.59)
     }
 
     #[test]
     fn a_hidden_end_that_sticks_out_over_free_table_turns_back_under_the_occluder() {
-        let s = Scene::new();
-        let frame = Frame::new(64, 48, &s.rgb, &s.depth, 0.001).expect("frame");
-        let e = Evidence {
-            frame: &frame,
-            mask: &s.mask,
-            occlusions: &s.rects,
-            camera: &s.camera,
-            radius: 0.0075,
-        };
+        let t = table();
+        let frame = t.frame();
+        let e = t.evidence(&frame, &RIGHT_HALF, 0.0075);
         // Visible nodes 0-2 come in from the right edge to the
         // rectangle's border; the hidden tip 3-5 carries on left, over free table.
         let mut nodes = vec![
@@ -270,16 +242,10 @@ mod tests {
 
     #[test]
     fn a_run_nothing_can_clear_stays_where_it_was_and_is_counted() {
-        let s = Scene::new();
-        let frame = Frame::new(64, 48, &s.rgb, &s.depth, 0.001).expect("frame");
+        let t = table();
+        let frame = t.frame();
         // No rectangle: the whole table is free space.
-        let e = Evidence {
-            frame: &frame,
-            mask: &s.mask,
-            occlusions: &[],
-            camera: &s.camera,
-            radius: 0.0075,
-        };
+        let e = t.evidence(&frame, &[], 0.0075);
         let mut nodes = vec![
             at(40.0, 24.0),
             at(36.0, 24.0),
@@ -294,7 +260,6 @@ mod tests {
 
     #[test]
     fn a_run_partly_cleared_takes_the_smallest_turn_and_counts_what_is_left() {
-        let s = Scene::new();
         // A 12 x 12 px occluder right of the anchor: no turn brings the
         // whole tip under it; 45 degrees (the smallest) brings in one node.
         let rects = [Rect {
@@ -303,14 +268,9 @@ mod tests {
             w: 12,
             h: 12,
         }];
-        let frame = Frame::new(64, 48, &s.rgb, &s.depth, 0.001).expect("frame");
-        let e = Evidence {
-            frame: &frame,
-            mask: &s.mask,
-            occlusions: &rects,
-            camera: &s.camera,
-            radius: 0.0075,
-        };
+        let t = table();
+        let frame = t.frame();
+        let e = t.evidence(&frame, &rects, 0.0075);
         let mut nodes = vec![
             at(44.0, 24.0),
             at(40.0, 24.0),
@@ -332,23 +292,16 @@ mod tests {
 
     #[test]
     fn a_middle_run_bulging_over_free_table_is_drawn_to_its_chord() {
-        let s = Scene::new();
-        let mut rects = s.rects;
         // The occluder covers columns 26-37 of rows 20-28.
-        rects[0] = Rect {
+        let rects = [Rect {
             x: 26,
             y: 20,
             w: 12,
             h: 9,
-        };
-        let frame = Frame::new(64, 48, &s.rgb, &s.depth, 0.001).expect("frame");
-        let e = Evidence {
-            frame: &frame,
-            mask: &s.mask,
-            occlusions: &rects,
-            camera: &s.camera,
-            radius: 0.0075,
-        };
+        }];
+        let t = table();
+        let frame = t.frame();
+        let e = t.evidence(&frame, &rects, 0.0075);
         // Anchors at rows 18 and 30 either side of the band; the hidden
         // middle bulges left into free table.
         let mut nodes = vec![

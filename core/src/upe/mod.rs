@@ -253,38 +253,22 @@ mod tests {
 
     #[test]
     fn the_step_moves_a_hidden_end_out_of_free_space_only_when_asked() {
-        use crate::perception::evidence::Evidence;
-        use crate::perception::frame::Frame;
-        use crate::perception::segmentation::{Mask, Rect};
+        use crate::perception::evidence::fixture::Table;
+        use crate::perception::segmentation::Rect;
         // A table at 0.6 m, an occlusion rectangle over the right half; the
-        // visible nodes lie under it, the hidden tip sticks out
-        // over free table to the left.
-        let camera = CameraIntrinsics {
-            width: 64,
-            height: 48,
-            fx: 60.0,
-            fy: 60.0,
-            cx: 32.0,
-            cy: 24.0,
-        };
-        let rgb = alloc::vec![0u8; 64 * 48 * 3];
-        let depth = alloc::vec![600u16; 64 * 48];
-        let frame = Frame::new(64, 48, &rgb, &depth, 0.001).expect("frame");
-        let mask = Mask::new(64, 48);
+        // visible nodes lie under it, the hidden tip sticks out over free
+        // table to the left.
+        let table = Table::new(64, 48, 60.0, 600);
+        let frame = table.frame();
         let rects = [Rect {
             x: 32,
             y: 0,
             w: 32,
             h: 48,
         }];
-        let evidence = Evidence {
-            frame: &frame,
-            mask: &mask,
-            occlusions: &rects,
-            camera: &camera,
-            radius: 0.0075,
-        };
-        let at = |u: f64| Vec3::new((u - 32.0) * 0.59 / 60.0, 0.0, 0.59);
+        let evidence = table.evidence(&frame, &rects, 0.0075);
+        let camera = table.camera;
+        let at = |u: f64| table.at(u, 24.0, 0.59);
         let previous: Vec<Vec3> = [44.0, 40.0, 36.0, 30.0, 26.0, 22.0]
             .iter()
             .map(|&u| at(u))
