@@ -163,21 +163,21 @@ mod tests {
         table().at(u, v, 0.59)
     }
 
+    /// Six nodes along row 24: 0-2 in from the right edge to the right
+    /// half's border, 3-5 (the hidden tip) on over the left half.
+    fn tip_over_free_table() -> Vec<Vec3> {
+        [44.0, 40.0, 36.0, 30.0, 26.0, 22.0]
+            .iter()
+            .map(|&u| at(u, 24.0))
+            .collect()
+    }
+
     #[test]
     fn a_hidden_end_that_sticks_out_over_free_table_turns_back_under_the_occluder() {
         let t = table();
         let frame = t.frame();
         let e = t.evidence(&frame, &RIGHT_HALF, 0.0075);
-        // Visible nodes 0-2 come in from the right edge to the
-        // rectangle's border; the hidden tip 3-5 carries on left, over free table.
-        let mut nodes = vec![
-            at(44.0, 24.0),
-            at(40.0, 24.0),
-            at(36.0, 24.0),
-            at(30.0, 24.0),
-            at(26.0, 24.0),
-            at(22.0, 24.0),
-        ];
+        let mut nodes = tip_over_free_table();
         let known = [true, true, true, false, false, false];
         let before = nodes.clone();
         let len = |p: &[Vec3]| p.windows(2).map(|w| (w[1] - w[0]).norm()).sum::<f64>();
@@ -271,14 +271,7 @@ mod tests {
         let t = table();
         let frame = t.frame();
         let e = t.evidence(&frame, &rects, 0.0075);
-        let mut nodes = vec![
-            at(44.0, 24.0),
-            at(40.0, 24.0),
-            at(36.0, 24.0),
-            at(30.0, 24.0),
-            at(26.0, 24.0),
-            at(22.0, 24.0),
-        ];
+        let mut nodes = tip_over_free_table();
         let before = nodes.clone();
         let known = [true, true, true, false, false, false];
         let r = clear_free_space(&mut nodes, &known, &e);
