@@ -1,0 +1,374 @@
+//! Depth to colour alignment, as librealsense's `rs2::align` (to colour) does
+//! it: each depth pixel's two corners are carried into the colour image, the
+//! depth value fills the colour pixels between them, the nearer depth wins
+//! where two depth pixels land on one colour pixel, and colour pixels that no
+//! depth pixel reaches stay 0 (holes). Arithmetic in `f32`, as librealsense's.
+
+use crate::error::RecordingError;
+
+/// A lens distortion model, named as librealsense names them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Distortion {
+    /// No distortion.
+    None,
+    /// Brown-Conrady, applied when projecting (librealsense's colour streams).
+    ModifiedBrownConrady,
+    /// Brown-Conrady inverse, applied when deprojecting.
+    InverseBrownConrady,
+    /// Brown-Conrady forward model (OpenCV's `plumb_bob`); deprojection iterates.
+    BrownConrady,
+}
+
+impl Distortion {
+    /// The model a `CameraInfo` names: librealsense's names and ROS's `plumb_bob`.
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name.to_ascii_lowercase().as_str() {
+            "none" | "" => Some(Self::None),
+            "modified brown conrady" => Some(Self::ModifiedBrownConrady),
+            "inverse brown conrady" => Some(Self::InverseBrownConrady),
+            "brown conrady" | "plumb_bob" => Some(Self::BrownConrady),
+            _ => None,
+        }
+    }
+}
+
+/// Pinhole intrinsics with a distortion model, as `rs2_intrinsics`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Intrinsics {
+    /// Columns.
+    pub width: u32,
+    /// Rows.
+    pub height: u32,
+    /// Principal point x, pixels.
+    pub ppx: f32,
+    /// Principal point y, pixels.
+    pub ppy: f32,
+    /// Focal length x, pixels.
+    pub fx: f32,
+    /// Focal length y, pixels.
+    pub fy: f32,
+    /// Distortion model.
+    pub model: Distortion,
+    /// `k1, k2, p1, p2, k3`.
+    pub coeffs: [f32; 5],
+}
+
+impl Intrinsics {
+    /// Pixel of a point in this camera's frame (metres), as `rs2_project_point_to_pixel`.
+    pub fn project(&self, p: [f32; 3]) -> [f32; 2] {
+        let mut x = p[0] / p[2];
+        let mut y = p[1] / p[2];
+        let [k1, k2, p1, p2, k3] = self.coeffs;
+        match self.model {
+            Distortion::ModifiedBrownConrady => {
+                let r2 = x * x + y * y;
+                let f = 1.0 + k1 * r2 + k2 * r2 * r2 + k3 * r2 * r2 * r2;
+                x *= f;
+                y *= f;
+                let dx = x + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
+                let dy = y + 2.0 * p2 * x * y + p1 * (r2 + 2.0 * y * y);
+                x = dx;
+                y = dy;
+            }
+            Distortion::BrownConrady => {
+                let r2 = x * x + y * y;
+                let f = 1.0 + k1 * r2 + k2 * r2 * r2 + k3 * r2 * r2 * r2;
+                let dx = x * f + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
+                let dy = y * f + 2.0 * p2 * x * y + p1 * (r2 + 2.0 * y * y);
+                x = dx;
+                y = dy;
+            }
+            Distortion::None | Distortion::InverseBrownConrady => {}
+        }
+        [x * self.fx + self.ppx, y * self.fy + self.ppy]
+    }
+
+    /// Point at `depth` metres behind pixel `px`, as `rs2_deproject_pixel_to_point`.
+    pub fn deproject(&self, px: [f32; 2], depth: f32) -> [f32; 3] {
+        let mut x = (px[0] - self.ppx) / self.fx;
+        let mut y = (px[1] - self.ppy) / self.fy;
+        let [k1, k2, p1, p2, k3] = self.coeffs;
+        match self.model {
+            Distortion::InverseBrownConrady => {
+                let r2 = x * x + y * y;
+                let f = 1.0 + k1 * r2 + k2 * r2 * r2 + k3 * r2 * r2 * r2;
+                let ux = x * f + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
+                let uy = y * f + 2.0 * p2 * x * y + p1 * (r2 + 2.0 * y * y);
+                x = ux;
+                y = uy;
+            }
+            Distortion::BrownConrady => {
+                // Fixed-point undistortion; ten steps, as librealsense takes.
+                let (xd, yd) = (x, y);
+                for _ in 0..UNDISTORT_ITERATIONS {
+                    let r2 = x * x + y * y;
+                    let icdist = 1.0 / (1.0 + ((k3 * r2 + k2) * r2 + k1) * r2);
+                    let dx = 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
+                    let dy = 2.0 * p2 * x * y + p1 * (r2 + 2.0 * y * y);
+                    x = (xd - dx) * icdist;
+                    y = (yd - dy) * icdist;
+                }
+            }
+            Distortion::None | Distortion::ModifiedBrownConrady => {}
+        }
+        [depth * x, depth * y, depth]
+    }
+
+    /// An error unless the size and focal lengths can be used.
+    pub fn check(&self, what: &str) -> Result<(), RecordingError> {
+        let finite = [self.ppx, self.ppy, self.fx, self.fy]
+            .iter()
+            .chain(&self.coeffs)
+            .all(|v| v.is_finite());
+        if self.width == 0 || self.height == 0 || !finite || self.fx <= 0.0 || self.fy <= 0.0 {
+            return Err(RecordingError::message(
+                what,
+                format!("unusable intrinsics {self:?}"),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Undistortion iterations for the Brown-Conrady deprojection.
+pub const UNDISTORT_ITERATIONS: usize = 10;
+
+/// A rigid transform between two cameras, as `rs2_extrinsics`: `p' = R p + t`,
+/// `rotation` column-major.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Extrinsics {
+    /// Rotation, column-major 3x3.
+    pub rotation: [f32; 9],
+    /// Translation, metres.
+    pub translation: [f32; 3],
+}
+
+impl Extrinsics {
+    /// The identity.
+    pub const IDENTITY: Self = Self {
+        rotation: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
+        translation: [0.0; 3],
+    };
+
+    /// From a unit quaternion `x, y, z, w` and a translation (a `geometry_msgs/Transform`).
+    pub fn from_quaternion(q: [f64; 4], t: [f64; 3]) -> Self {
+        let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
+        let [x, y, z, w] = if n > 0.0 {
+            [q[0] / n, q[1] / n, q[2] / n, q[3] / n]
+        } else {
+            [0.0, 0.0, 0.0, 1.0]
+        };
+        // Row-major R of the quaternion, stored column-major.
+        let r = [
+            [
+                1.0 - 2.0 * (y * y + z * z),
+                2.0 * (x * y - z * w),
+                2.0 * (x * z + y * w),
+            ],
+            [
+                2.0 * (x * y + z * w),
+                1.0 - 2.0 * (x * x + z * z),
+                2.0 * (y * z - x * w),
+            ],
+            [
+                2.0 * (x * z - y * w),
+                2.0 * (y * z + x * w),
+                1.0 - 2.0 * (x * x + y * y),
+            ],
+        ];
+        let mut rotation = [0.0f32; 9];
+        for col in 0..3 {
+            for row in 0..3 {
+                rotation[col * 3 + row] = r[row][col] as f32;
+            }
+        }
+        Self {
+            rotation,
+            translation: [t[0] as f32, t[1] as f32, t[2] as f32],
+        }
+    }
+
+    /// `R p + t`, as `rs2_transform_point_to_point`.
+    pub fn apply(&self, p: [f32; 3]) -> [f32; 3] {
+        let r = &self.rotation;
+        [
+            r[0] * p[0] + r[3] * p[1] + r[6] * p[2] + self.translation[0],
+            r[1] * p[0] + r[4] * p[1] + r[7] * p[2] + self.translation[1],
+            r[2] * p[0] + r[5] * p[1] + r[8] * p[2] + self.translation[2],
+        ]
+    }
+
+    /// The inverse transform.
+    pub fn inverse(&self) -> Self {
+        let r = &self.rotation;
+        // Transposed rotation, column-major.
+        let rt = [r[0], r[3], r[6], r[1], r[4], r[7], r[2], r[5], r[8]];
+        let t = self.translation;
+        let inv = Self {
+            rotation: rt,
+            translation: [0.0; 3],
+        };
+        let m = inv.apply(t);
+        Self {
+            rotation: rt,
+            translation: [-m[0], -m[1], -m[2]],
+        }
+    }
+
+    /// `self` then `next`: `next(self(p))`.
+    pub fn then(&self, next: &Self) -> Self {
+        let mut rotation = [0.0f32; 9];
+        for col in 0..3 {
+            let c = [
+                self.rotation[col * 3],
+                self.rotation[col * 3 + 1],
+                self.rotation[col * 3 + 2],
+            ];
+            let rc = next.apply(c);
+            for row in 0..3 {
+                rotation[col * 3 + row] = rc[row] - next.translation[row];
+            }
+        }
+        Self {
+            rotation,
+            translation: next.apply(self.translation),
+        }
+    }
+}
+
+/// Depth (units of `depth_scale` metres, `depth_intr.width x height`, 0 = none)
+/// seen from the colour camera, at the colour camera's size.
+pub fn align_depth_to_color(
+    depth: &[u16],
+    depth_intr: &Intrinsics,
+    color_intr: &Intrinsics,
+    depth_to_color: &Extrinsics,
+    depth_scale: f32,
+) -> Result<Vec<u16>, RecordingError> {
+    let (dw, dh) = (depth_intr.width as usize, depth_intr.height as usize);
+    if depth.len() != dw * dh {
+        return Err(RecordingError::message(
+            "depth",
+            format!("{} depth values for a {dw}x{dh} depth image", depth.len()),
+        ));
+    }
+    let (cw, ch) = (color_intr.width as i64, color_intr.height as i64);
+    let mut out = vec![0u16; (cw * ch) as usize];
+    for dy in 0..dh {
+        for dx in 0..dw {
+            let z = depth[dy * dw + dx];
+            if z == 0 {
+                continue;
+            }
+            let metres = depth_scale * f32::from(z);
+            let corner = |ox: f32, oy: f32| {
+                let p = depth_intr.deproject([dx as f32 + ox, dy as f32 + oy], metres);
+                let q = color_intr.project(depth_to_color.apply(p));
+                // Truncation of `+ 0.5`, as librealsense rounds.
+                ((q[0] + 0.5) as i64, (q[1] + 0.5) as i64)
+            };
+            let (x0, y0) = corner(-0.5, -0.5);
+            let (x1, y1) = corner(0.5, 0.5);
+            if x0 < 0 || y0 < 0 || x1 >= cw || y1 >= ch {
+                continue;
+            }
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    let o = &mut out[(y * cw + x) as usize];
+                    *o = if *o == 0 { z } else { (*o).min(z) };
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn intr(w: u32, h: u32, f: f32, ppx: f32, ppy: f32) -> Intrinsics {
+        Intrinsics {
+            width: w,
+            height: h,
+            ppx,
+            ppy,
+            fx: f,
+            fy: f,
+            model: Distortion::None,
+            coeffs: [0.0; 5],
+        }
+    }
+
+    #[test]
+    fn each_depth_pixel_covers_its_corners_and_the_nearest_depth_wins() {
+        // librealsense maps the corners (x - 0.5, x + 0.5) and fills every
+        // colour pixel between them; a colour grid a quarter pixel off keeps
+        // the corners away from the rounding edge, so each covers a 2x2 block.
+        let d = intr(3, 3, 10.0, 1.0, 1.0);
+        let c = intr(3, 3, 10.0, 1.25, 1.25);
+        let depth = [900, 800, 0, 700, 0, 0, 0, 0, 0];
+        let out =
+            align_depth_to_color(&depth, &d, &c, &Extrinsics::IDENTITY, 0.001).expect("aligns");
+        assert_eq!(out, vec![900, 800, 800, 700, 700, 800, 700, 700, 0]);
+    }
+
+    #[test]
+    fn a_baseline_shifts_depth_by_its_disparity() {
+        // Colour camera 15 mm to the right: a point at 1 m moves f * b / z = 1.5 px left.
+        let i = intr(20, 3, 100.0, 9.5, 1.0);
+        let mut depth = vec![0u16; 60];
+        depth[20 + 10] = 1000;
+        let shift = Extrinsics {
+            translation: [-0.015, 0.0, 0.0],
+            ..Extrinsics::IDENTITY
+        };
+        let out = align_depth_to_color(&depth, &i, &i, &shift, 0.001).expect("aligns");
+        let filled: Vec<usize> = (0..60).filter(|&k| out[k] == 1000).collect();
+        assert_eq!(filled, vec![28, 29, 48, 49]);
+        assert_eq!(out.iter().filter(|&&v| v != 0).count(), 4);
+    }
+
+    #[test]
+    fn pixels_that_land_outside_are_dropped_not_clamped() {
+        let i = intr(4, 3, 10.0, 1.5, 1.0);
+        let mut depth = vec![0u16; 12];
+        depth[4] = 1000;
+        depth[7] = 1000;
+        let shift = Extrinsics {
+            translation: [0.5, 0.0, 0.0],
+            ..Extrinsics::IDENTITY
+        };
+        let out = align_depth_to_color(&depth, &i, &i, &shift, 0.001).expect("aligns");
+        assert_eq!(out, vec![0; 12]);
+    }
+
+    #[test]
+    fn quaternion_inverse_and_composition_agree() {
+        let a = Extrinsics::from_quaternion([0.1, -0.2, 0.05, 0.97], [0.01, 0.02, -0.03]);
+        let p = [0.3, -0.1, 1.2];
+        let back = a.inverse().apply(a.apply(p));
+        for k in 0..3 {
+            assert!((back[k] - p[k]).abs() < 1e-6);
+        }
+        let b = Extrinsics::from_quaternion([0.0, 0.3, 0.0, 0.95], [0.0, 0.0, 0.1]);
+        let ab = a.then(&b).apply(p);
+        let step = b.apply(a.apply(p));
+        for k in 0..3 {
+            assert!((ab[k] - step[k]).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn distortion_round_trips() {
+        let mut i = intr(64, 48, 50.0, 32.0, 24.0);
+        i.coeffs = [0.1, -0.05, 0.001, -0.002, 0.01];
+        i.model = Distortion::BrownConrady;
+        let p = i.deproject([50.0, 10.0], 1.0);
+        let q = i.project(p);
+        assert!(
+            (q[0] - 50.0).abs() < 1e-3 && (q[1] - 10.0).abs() < 1e-3,
+            "{q:?}"
+        );
+    }
+}
