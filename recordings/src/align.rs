@@ -1,5 +1,5 @@
 //! Depth to colour alignment, as librealsense's `rs2::align` (to colour) does
-//! it: each depth pixel's two corners are carried into the colour image, the
+//! it: each depth pixel's corners are carried into the colour image, the
 //! depth value fills the colour pixels between them, the nearer depth wins
 //! where two depth pixels land on one colour pixel, and colour pixels that no
 //! depth pixel reaches stay 0 (holes). Arithmetic in `f32`, as librealsense's.
@@ -236,8 +236,38 @@ impl Extrinsics {
     }
 }
 
+/// Horizontal and vertical field of view, degrees, as `rs2_fov` measures it.
+fn fov_deg(i: &Intrinsics) -> [f32; 2] {
+    let w = i.width as f32;
+    let h = i.height as f32;
+    [
+        ((i.ppx + 0.5).atan2(i.fx) + (w - (i.ppx + 0.5)).atan2(i.fx)).to_degrees(),
+        ((i.ppy + 0.5).atan2(i.fy) + (h - (i.ppy + 0.5)).atan2(i.fy)).to_degrees(),
+    ]
+}
+
+/// `true` when a depth pixel is wider than a colour pixel, so each depth pixel
+/// fills the span between its two corners; otherwise only its top-left corner
+/// is filled, as librealsense decides (with its two special resolution pairs).
+fn fills_span(depth: &Intrinsics, color: &Intrinsics) -> bool {
+    let (fd, fc) = (fov_deg(depth), fov_deg(color));
+    let per_angle = |i: &Intrinsics, f: [f32; 2]| [i.width as f32 / f[0], i.height as f32 / f[1]];
+    let (pd, pc) = (per_angle(depth, fd), per_angle(color, fc));
+    let special = matches!(
+        (depth.width, depth.height, color.width, color.height),
+        (640, 240, 320, 180) | (640, 480, 640, 360)
+    );
+    pd[0] < pc[0] || pd[1] < pc[1] || special
+}
+
 /// Depth (units of `depth_scale` metres, `depth_intr.width x height`, 0 = none)
 /// seen from the colour camera, at the colour camera's size.
+///
+/// This is the arithmetic of librealsense's x86 (SSE) aligner, the one
+/// pyrealsense2's wheels run: the depth ray of each corner as
+/// `(x - ppx) / fx` (undistorted only for inverse Brown-Conrady), the corner's
+/// colour pixel rounded half to even after adding 0.5, colour pixels outside
+/// the image clipped one by one.
 pub fn align_depth_to_color(
     depth: &[u16],
     depth_intr: &Intrinsics,
@@ -253,6 +283,35 @@ pub fn align_depth_to_color(
         ));
     }
     let (cw, ch) = (color_intr.width as i64, color_intr.height as i64);
+    let span = fills_span(depth_intr, color_intr);
+    let ray = |px: f32, py: f32| {
+        let mut x = (px - depth_intr.ppx) / depth_intr.fx;
+        let mut y = (py - depth_intr.ppy) / depth_intr.fy;
+        if depth_intr.model == Distortion::InverseBrownConrady {
+            let [k1, k2, p1, p2, k3] = depth_intr.coeffs;
+            let r2 = x * x + y * y;
+            let f = 1.0 + k1 * r2 + k2 * r2 * r2 + k3 * r2 * r2 * r2;
+            let ux = x * f + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
+            let uy = y * f + 2.0 * p2 * x * y + p1 * (r2 + 2.0 * y * y);
+            x = ux;
+            y = uy;
+        }
+        (x, y)
+    };
+    let r = &depth_to_color.rotation;
+    let t = &depth_to_color.translation;
+    let corner = |x: f32, y: f32, d: f32| {
+        let (px, py) = (d * x, d * y);
+        // Summed in the aligner's order: r0 x + (r3 y + (r6 z + t)).
+        let qx = r[0] * px + (r[3] * py + (r[6] * d + t[0]));
+        let qy = r[1] * px + (r[4] * py + (r[7] * d + t[1]));
+        let qz = r[2] * px + (r[5] * py + (r[8] * d + t[2]));
+        let p = color_intr.project([qx / qz, qy / qz, 1.0]);
+        (
+            (p[0] + 0.5).round_ties_even() as i64,
+            (p[1] + 0.5).round_ties_even() as i64,
+        )
+    };
     let mut out = vec![0u16; (cw * ch) as usize];
     for dy in 0..dh {
         for dx in 0..dw {
@@ -260,20 +319,17 @@ pub fn align_depth_to_color(
             if z == 0 {
                 continue;
             }
-            let metres = depth_scale * f32::from(z);
-            let corner = |ox: f32, oy: f32| {
-                let p = depth_intr.deproject([dx as f32 + ox, dy as f32 + oy], metres);
-                let q = color_intr.project(depth_to_color.apply(p));
-                // Truncation of `+ 0.5`, as librealsense rounds.
-                ((q[0] + 0.5) as i64, (q[1] + 0.5) as i64)
+            let d = f32::from(z) * depth_scale;
+            let (tx, ty) = ray(dx as f32 - 0.5, dy as f32 - 0.5);
+            let (x0, y0) = corner(tx, ty, d);
+            let (x1, y1) = if span {
+                let (bx, by) = ray(dx as f32 + 0.5, dy as f32 + 0.5);
+                corner(bx, by, d)
+            } else {
+                (x0, y0)
             };
-            let (x0, y0) = corner(-0.5, -0.5);
-            let (x1, y1) = corner(0.5, 0.5);
-            if x0 < 0 || y0 < 0 || x1 >= cw || y1 >= ch {
-                continue;
-            }
-            for y in y0..=y1 {
-                for x in x0..=x1 {
+            for y in y0.max(0)..=y1.min(ch - 1) {
+                for x in x0.max(0)..=x1.min(cw - 1) {
                     let o = &mut out[(y * cw + x) as usize];
                     *o = if *o == 0 { z } else { (*o).min(z) };
                 }
@@ -324,9 +380,10 @@ mod tests {
             ..Extrinsics::IDENTITY
         };
         let out = align_depth_to_color(&depth, &i, &i, &shift, 0.001).expect("aligns");
-        let filled: Vec<usize> = (0..60).filter(|&k| out[k] == 1000).collect();
-        assert_eq!(filled, vec![28, 29, 48, 49]);
-        assert_eq!(out.iter().filter(|&&v| v != 0).count(), 4);
+        // Same pixel size on both cameras: only the top-left corner is filled.
+        assert!(!fills_span(&i, &i));
+        let filled: Vec<usize> = (0..60).filter(|&k| out[k] != 0).collect();
+        assert_eq!(filled, vec![28]);
     }
 
     #[test]

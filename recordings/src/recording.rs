@@ -188,7 +188,10 @@ impl<R: ByteSource> Recording<R> {
         topics.sort();
         let list = || {
             if topics.is_empty() {
-                " (the recording has no image topics)".to_string()
+                match bag.warnings.first() {
+                    Some(w) => format!(" (the recording has no image topics: {w})"),
+                    None => " (the recording has no image topics)".to_string(),
+                }
             } else {
                 let names: Vec<String> = topics
                     .iter()
