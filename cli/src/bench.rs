@@ -46,7 +46,11 @@ fn timed(
 
 /// `upetrack bench [<sequence>...] [--frames N] [--repeat R] [--algorithm A,B,..]`.
 pub fn cmd_bench(raw: &[String]) -> Result<(), CliError> {
-    let args = Args::parse(raw, &[], &["frames", "repeat", "algorithm", "params"])?;
+    let args = Args::parse(
+        raw,
+        &[],
+        &crate::with_recording_options(&["frames", "repeat", "algorithm", "params"]),
+    )?;
     let frames: usize = args.number("frames", 90)?;
     let repeats: usize = args.number("repeat", 3)?.max(1);
     let mut sets = Vec::new();
@@ -73,7 +77,7 @@ pub fn cmd_bench(raw: &[String]) -> Result<(), CliError> {
         }
     } else {
         for path in &args.positional {
-            let seq = open_sequence(path)?;
+            let seq = open_sequence(path, &crate::RecordingArgs::from(&args))?;
             let mut fr = Vec::new();
             for i in 0..seq.len().min(frames) {
                 let d = seq.frame(i)?;

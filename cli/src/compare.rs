@@ -299,7 +299,7 @@ pub fn cmd_compare(raw: &[String]) -> Result<(), CliError> {
             continue;
         }
         let dir = ensure_sequence(&data, &case)?;
-        let seq = open_sequence(&dir.to_string_lossy())?;
+        let seq = open_sequence(&dir.to_string_lossy(), &crate::RecordingArgs::default())?;
         for &a in &algorithms {
             let (summary, _) = evaluate(&seq, &name, with_algorithm(params, a))?;
             eprintln!(

@@ -4,6 +4,7 @@
 mod bench;
 mod compare;
 mod overlay;
+mod recording;
 mod synth;
 
 use std::path::Path;
@@ -25,9 +26,14 @@ USAGE:
   upetrack synth <scenario> <dir> [--frames N] [--seed S] [--hd] [--variant V]
   upetrack bench [<sequence>...] [--frames N] [--repeat R] [--algorithm A,B,..]
   upetrack overlay <sequence> <result.json> <frame> <out.png> [--depth]
+  upetrack info <recording.bag> [--json] [--color-topic T] [--depth-topic T]
+  upetrack export <recording.bag> <dir> [--frames A..B] [--dlo <dlo.json>] [--color-topic T] [--depth-topic T]
   upetrack scenarios
 
-A sequence is a folder in the layout of docs/sequence-format.md, or a .zip of one.
+A sequence is a folder in the layout of docs/sequence-format.md, a .zip of one, or a
+camera recording (ROS1 .bag from the RealSense Viewer, rs-record or realsense-ros);
+a recording takes its configuration from --dlo <dlo.json> (colour range, occluders),
+and --color-topic / --depth-topic when the streams are not found by name.
 Algorithms: upetrack (default), cpd, trackdlo; --algorithm overrides the parameter file's.
 Scenarios: static-s, dynamic-pull, tip-drag, sweep-10..sweep-50, lifted-swing, fast-pull.";
 
@@ -134,13 +140,51 @@ fn with_algorithm(params: Params, algorithm: Algorithm) -> Params {
     }
 }
 
-/// A sequence from a folder or a .zip.
+/// A sequence from a folder, a .zip or a recording.
 pub type AnySequence = Sequence<Box<dyn upetrack_io::Source>>;
 
-fn open_sequence(path: &str) -> Result<AnySequence, CliError> {
-    Ok(Sequence::open(upetrack_io::open::open_path(Path::new(
-        path,
-    ))?)?)
+/// Options of every command that reads sequences, for recordings.
+const RECORDING_OPTIONS: [&str; 3] = ["dlo", "color-topic", "depth-topic"];
+
+/// `valued` with the recording options added.
+fn with_recording_options<'a>(valued: &[&'a str]) -> Vec<&'a str> {
+    valued.iter().copied().chain(RECORDING_OPTIONS).collect()
+}
+
+/// How to read a recording: its configuration file and topics.
+#[derive(Default)]
+struct RecordingArgs {
+    dlo: Option<String>,
+    options: upetrack_recordings::RecordingOptions,
+}
+
+impl RecordingArgs {
+    fn from(args: &Args) -> Self {
+        Self {
+            dlo: args.value("dlo").map(str::to_string),
+            options: upetrack_recordings::RecordingOptions {
+                color_topic: args.value("color-topic").map(str::to_string),
+                depth_topic: args.value("depth-topic").map(str::to_string),
+            },
+        }
+    }
+}
+
+fn open_sequence(path: &str, rec: &RecordingArgs) -> Result<AnySequence, CliError> {
+    let p = Path::new(path);
+    if p.is_file() && upetrack_io::recorded::is_recording_file(p) {
+        return Ok(upetrack_io::recorded::open_recording(
+            p,
+            rec.dlo.as_deref().map(Path::new),
+            &rec.options,
+        )?);
+    }
+    if rec.dlo.is_some() {
+        return Err(CliError(format!(
+            "{path}: --dlo is for recordings (.bag); a sequence folder has its own dlo.json"
+        )));
+    }
+    Ok(Sequence::open(upetrack_io::open::open_path(p)?)?)
 }
 
 fn now_ms_since(start: Instant) -> impl FnMut() -> f64 {
@@ -148,7 +192,11 @@ fn now_ms_since(start: Instant) -> impl FnMut() -> f64 {
 }
 
 fn cmd_track(raw: &[String]) -> Result<(), CliError> {
-    let args = Args::parse(raw, &[], &["out", "params", "algorithm"])?;
+    let args = Args::parse(
+        raw,
+        &[],
+        &with_recording_options(&["out", "params", "algorithm"]),
+    )?;
     let [seq_path] = args.positional.as_slice() else {
         return Err(CliError(format!("track takes one sequence\n\n{USAGE}")));
     };
@@ -160,7 +208,7 @@ fn cmd_track(raw: &[String]) -> Result<(), CliError> {
         [one] => with_algorithm(params, *one),
         _ => return Err(CliError("track runs one algorithm".into())),
     };
-    let seq = open_sequence(seq_path)?;
+    let seq = open_sequence(seq_path, &RecordingArgs::from(&args))?;
     let result = track_sequence(&seq, params, &mut now_ms_since(Instant::now()))?;
     upetrack_io::write::write_json(Path::new(out), &result)?;
     let lost = result.frames.iter().filter(|f| f.lost).count();
@@ -225,7 +273,7 @@ fn cmd_eval(raw: &[String]) -> Result<(), CliError> {
     let args = Args::parse(
         raw,
         &[],
-        &["params", "json", "markdown", "per-frame", "algorithm"],
+        &with_recording_options(&["params", "json", "markdown", "per-frame", "algorithm"]),
     )?;
     if args.positional.is_empty() {
         return Err(CliError(format!(
@@ -237,7 +285,7 @@ fn cmd_eval(raw: &[String]) -> Result<(), CliError> {
     let several = args.positional.len() > 1 || algorithms.len() > 1;
     let mut rows = Vec::new();
     for path in &args.positional {
-        let seq = open_sequence(path)?;
+        let seq = open_sequence(path, &RecordingArgs::from(&args))?;
         let name = Path::new(path)
             .file_name()
             .map_or(path.clone(), |n| n.to_string_lossy().into_owned());
@@ -324,6 +372,8 @@ fn run(raw: &[String]) -> Result<(), CliError> {
         "synth" => synth::cmd_synth(rest),
         "bench" => bench::cmd_bench(rest),
         "overlay" => overlay::cmd_overlay(rest),
+        "info" => recording::cmd_info(rest),
+        "export" => recording::cmd_export(rest),
         "scenarios" => {
             synth::list_scenarios();
             Ok(())

@@ -45,13 +45,13 @@ fn disc(rgb: &mut [u8], w: i64, h: i64, p: (f64, f64), r: i64, c: [u8; 3]) {
 
 /// `upetrack overlay <sequence> <result.json> <frame> <out.png>`.
 pub fn cmd_overlay(raw: &[String]) -> Result<(), CliError> {
-    let args = Args::parse(raw, &["depth"], &[])?;
+    let args = Args::parse(raw, &["depth"], &crate::with_recording_options(&[]))?;
     let [seq_path, result_path, frame, out] = args.positional.as_slice() else {
         return Err(CliError(format!(
             "overlay takes a sequence, a result, a frame and an output\n\n{USAGE}"
         )));
     };
-    let seq = open_sequence(seq_path)?;
+    let seq = open_sequence(seq_path, &crate::RecordingArgs::from(&args))?;
     let text = std::fs::read_to_string(result_path)
         .map_err(|e| CliError(format!("{result_path}: {e}")))?;
     let result: TrackResult = serde_json::from_str(&text)

@@ -44,6 +44,14 @@ pub enum SequenceError {
         /// What the decoder said.
         message: String,
     },
+    /// A camera recording (.bag) that cannot be read.
+    #[error("{path}: {source}")]
+    Recording {
+        /// The recording.
+        path: String,
+        /// What the recording reader said.
+        source: upetrack_recordings::RecordingError,
+    },
     /// A size cap was exceeded.
     #[error("{path}: {what} is {actual}, above the limit of {limit}")]
     TooLarge {

@@ -1,6 +1,7 @@
 //! Sequences in the contract's layout (`docs/sequence-format.md`): reading
 //! them from a folder or from files held in memory, decoding colour and
 //! depth images, writing them, the result JSON, and evaluation statistics.
+//! A camera recording (`.bag`) is read as a sequence through [`recorded`].
 #![warn(missing_docs)]
 
 pub mod archive;
@@ -8,8 +9,10 @@ pub mod decode;
 pub mod display;
 pub mod error;
 pub mod eval;
+pub mod export;
 pub mod open;
 pub mod params_file;
+pub mod recorded;
 pub mod result;
 pub mod run;
 pub mod sequence;

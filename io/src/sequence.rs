@@ -1,6 +1,8 @@
 //! A sequence in the contract's layout: intrinsics, optional `dlo.json` and
 //! ground truth, and colour/depth frame pairs decoded on demand.
 
+use std::cell::RefCell;
+
 use serde::{Deserialize, Serialize};
 use upetrack::math::Vec3;
 use upetrack::{CameraIntrinsics, Frame, HsvRange, Rect};
@@ -240,6 +242,8 @@ pub struct Sequence<S: Source> {
     pub color_files: Vec<String>,
     /// Relative paths of depth frames, name-sorted.
     pub depth_files: Vec<String>,
+    /// The recording the frames come from, when the sequence is a recording.
+    recording: Option<RefCell<crate::recorded::OpenRecording>>,
 }
 
 fn read_json<T: serde::de::DeserializeOwned, S: Source>(
@@ -293,6 +297,45 @@ fn sorted_files<S: Source>(
     Ok(names.into_iter().map(|n| format!("{dir}/{n}")).collect())
 }
 
+/// `dlo.json` of `source`, or the defaults when there is none.
+fn read_config<S: Source>(source: &S) -> Result<DloConfig, SequenceError> {
+    if source.is_file("dlo.json") {
+        DloConfig::parse(&source.read("dlo.json")?, &source.display("dlo.json"))
+    } else {
+        Ok(DloConfig::default())
+    }
+}
+
+/// Depth scale (metres per unit) and frame rate: `dlo.json`'s, else the
+/// intrinsics' or recording's (`units_per_metre`, `fps`), else the defaults.
+fn rates<S: Source>(
+    source: &S,
+    config: &DloConfig,
+    units_per_metre: Option<f64>,
+    fps: Option<f64>,
+) -> Result<(f64, f64), SequenceError> {
+    let dlo_path = source.display("dlo.json");
+    let depth_scale = match (config.depth_scale, units_per_metre) {
+        (Some(s), _) => s,
+        (None, Some(units_per_metre)) if units_per_metre != 0.0 => 1.0 / units_per_metre,
+        _ => DEFAULT_DEPTH_SCALE,
+    };
+    if !(depth_scale.is_finite() && depth_scale > 0.0 && depth_scale < 1.0) {
+        return Err(SequenceError::invalid(
+            &dlo_path,
+            format!("depth_scale {depth_scale} must be finite and in (0, 1) metres per unit"),
+        ));
+    }
+    let fps = config.fps.or(fps).unwrap_or(DEFAULT_FPS);
+    if !(fps.is_finite() && fps > 0.0 && fps <= 10_000.0) {
+        return Err(SequenceError::invalid(
+            &dlo_path,
+            format!("fps {fps} must be in (0, 10000]"),
+        ));
+    }
+    Ok((depth_scale, fps))
+}
+
 /// Parses and checks an intrinsics file.
 pub fn camera_from_file(
     file: &IntrinsicsFile,
@@ -332,32 +375,8 @@ impl<S: Source> Sequence<S> {
         let intr: IntrinsicsFile = read_json(&source, intr_path)?;
         let camera = camera_from_file(&intr, &source.display(intr_path))?;
 
-        let config: DloConfig = if source.is_file("dlo.json") {
-            DloConfig::parse(&source.read("dlo.json")?, &source.display("dlo.json"))?
-        } else {
-            DloConfig::default()
-        };
-        let dlo_path = source.display("dlo.json");
-        let depth_scale = match (config.depth_scale, intr.depth_scale) {
-            (Some(s), _) => s,
-            (None, Some(units_per_metre)) if units_per_metre != 0.0 => 1.0 / units_per_metre,
-            _ => DEFAULT_DEPTH_SCALE,
-        };
-        if !(depth_scale.is_finite() && depth_scale > 0.0 && depth_scale < 1.0) {
-            return Err(SequenceError::invalid(
-                &dlo_path,
-                format!("depth_scale {depth_scale} must be finite and in (0, 1) metres per unit"),
-            ));
-        }
-        let fps = config.fps.or(intr.fps).unwrap_or(DEFAULT_FPS);
-        if !(fps.is_finite() && fps > 0.0 && fps <= 10_000.0) {
-            return Err(SequenceError::invalid(
-                &dlo_path,
-                format!("fps {fps} must be in (0, 10000]"),
-            ));
-        }
-        let hsv = config.check(&dlo_path)?;
-
+        let config = read_config(&source)?;
+        let (depth_scale, fps) = rates(&source, &config, intr.depth_scale, intr.fps)?;
         let color_dir = COLOR_DIRS
             .into_iter()
             .find(|d| source.is_dir(d))
@@ -390,6 +409,53 @@ impl<S: Source> Sequence<S> {
             ));
         }
 
+        Self::assemble(
+            source,
+            camera,
+            (depth_scale, fps),
+            config,
+            (color_files, depth_files),
+            None,
+        )
+    }
+
+    /// The sequence of a camera recording, with `source` giving its `dlo.json`
+    /// (and the ground truth that names) in place of a folder's.
+    pub(crate) fn from_recording(
+        source: S,
+        recording: crate::recorded::OpenRecording,
+    ) -> Result<Self, SequenceError> {
+        let config = read_config(&source)?;
+        let camera = recording.camera()?;
+        // The recording's own depth units and frame rate stand unless dlo.json sets them.
+        let (depth_scale, fps) = rates(
+            &source,
+            &config,
+            Some(1.0 / recording.depth_units()),
+            Some(recording.fps()),
+        )?;
+        let names: Vec<String> = (0..recording.len())
+            .map(|i| recording.frame_name(i))
+            .collect();
+        Self::assemble(
+            source,
+            camera,
+            (depth_scale, fps),
+            config,
+            (names.clone(), names),
+            Some(RefCell::new(recording)),
+        )
+    }
+
+    fn assemble(
+        source: S,
+        camera: CameraIntrinsics,
+        (depth_scale, fps): (f64, f64),
+        config: DloConfig,
+        (color_files, depth_files): (Vec<String>, Vec<String>),
+        recording: Option<RefCell<crate::recorded::OpenRecording>>,
+    ) -> Result<Self, SequenceError> {
+        let hsv = config.check(&source.display("dlo.json"))?;
         let gt_name = config
             .groundtruth
             .clone()
@@ -444,6 +510,7 @@ impl<S: Source> Sequence<S> {
             groundtruth_occluded,
             color_files,
             depth_files,
+            recording,
         })
     }
 
@@ -477,6 +544,9 @@ impl<S: Source> Sequence<S> {
 
     /// Reads and decodes frame `index`, checking both images against the intrinsics.
     pub fn frame(&self, index: usize) -> Result<DecodedFrame, SequenceError> {
+        if let Some(rec) = &self.recording {
+            return rec.borrow_mut().frame(index);
+        }
         let (Some(cpath), Some(dpath)) = (self.color_files.get(index), self.depth_files.get(index))
         else {
             return Err(SequenceError::invalid(
@@ -506,6 +576,11 @@ impl<S: Source> Sequence<S> {
             color: color.data,
             depth: depth.data,
         })
+    }
+
+    /// The recording the frames come from, if any: its streams and what was paired.
+    pub fn recording_info(&self) -> Option<crate::recorded::RecordingInfo> {
+        self.recording.as_ref().map(|r| r.borrow().info())
     }
 
     /// The underlying source.

@@ -18,6 +18,16 @@ pub trait ByteSource {
     fn read_at(&mut self, offset: u64, buf: &mut [u8]) -> Result<(), RecordingError>;
 }
 
+impl<T: ByteSource + ?Sized> ByteSource for Box<T> {
+    fn len(&self) -> u64 {
+        (**self).len()
+    }
+
+    fn read_at(&mut self, offset: u64, buf: &mut [u8]) -> Result<(), RecordingError> {
+        (**self).read_at(offset, buf)
+    }
+}
+
 /// A file on disk, read by seeking.
 #[derive(Debug)]
 pub struct FileBytes {

@@ -388,8 +388,12 @@ impl<R: ByteSource> Recording<R> {
             .collect::<Vec<_>>()
             .join("/");
         let topic = format!("{sensor}/option/Depth_Units/value");
+        // The f32 option read as its shortest decimal: 0.001, not 0.0010000000474974513.
         let units = match first_message(bag, &topic)? {
-            Some(raw) => f64::from(ros_msgs::float32(&raw, &topic)?),
+            Some(raw) => {
+                let v = ros_msgs::float32(&raw, &topic)?;
+                v.to_string().parse().unwrap_or(f64::from(v))
+            }
             None => DEFAULT_DEPTH_UNITS,
         };
         if !(units.is_finite() && units > 0.0 && units < 1.0) {

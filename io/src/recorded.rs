@@ -1,0 +1,226 @@
+//! A camera recording (a ROS1 `.bag`) read as a sequence: the frames come from
+//! the recording, the configuration (`dlo.json`, and the ground truth it
+//! names) from a file beside it, given with `--dlo`.
+
+use std::path::Path;
+
+use serde::Serialize;
+use upetrack::CameraIntrinsics;
+use upetrack_recordings::{ByteSource, FileBytes, Recording, RecordingOptions};
+
+use crate::error::SequenceError;
+use crate::sequence::{DecodedFrame, Sequence};
+use crate::source::{is_inside_name, FolderSource, MemorySource, Source};
+
+/// `true` when the file at `path` starts like a recording this project reads.
+pub fn is_recording_file(path: &Path) -> bool {
+    let mut head = [0u8; 16];
+    let Ok(mut f) = std::fs::File::open(path) else {
+        return false;
+    };
+    use std::io::Read;
+    let n = f.read(&mut head).unwrap_or(0);
+    upetrack_recordings::is_recording(&head[..n])
+}
+
+/// A recording opened for reading frames.
+pub struct OpenRecording {
+    rec: Recording<Box<dyn ByteSource>>,
+    name: String,
+}
+
+/// What a recording holds, as `upetrack info` shows it.
+#[derive(Debug, Clone, Serialize)]
+pub struct RecordingInfo {
+    /// The file.
+    pub path: String,
+    /// `librealsense` or `ros`.
+    pub layout: String,
+    /// The colour stream.
+    pub color: StreamInfo,
+    /// The depth stream.
+    pub depth: StreamInfo,
+    /// Depth is in the depth imager's frame and is aligned to colour on reading.
+    pub aligned_on_reading: bool,
+    /// Metres per depth unit.
+    pub depth_units: f64,
+    /// Colour frames with a depth frame within half a period.
+    pub paired_frames: usize,
+    /// Colour frames left without depth.
+    pub unpaired_color: usize,
+    /// Depth frames left without colour.
+    pub unpaired_depth: usize,
+    /// Every image topic: name, message type, messages.
+    pub image_topics: Vec<(String, String, usize)>,
+    /// What the reader could not read.
+    pub warnings: Vec<String>,
+}
+
+/// One stream of [`RecordingInfo`].
+#[derive(Debug, Clone, Serialize)]
+pub struct StreamInfo {
+    /// Topic.
+    pub topic: String,
+    /// Columns.
+    pub width: u32,
+    /// Rows.
+    pub height: u32,
+    /// Frame rate.
+    pub fps: f64,
+    /// Messages.
+    pub frames: usize,
+    /// `fx, fy, ppx, ppy`.
+    pub intrinsics: [f32; 4],
+    /// Distortion model.
+    pub distortion: String,
+}
+
+fn stream_info(s: &upetrack_recordings::recording::Stream) -> StreamInfo {
+    let i = s.intrinsics;
+    StreamInfo {
+        topic: s.topic.clone(),
+        width: i.width,
+        height: i.height,
+        fps: s.fps,
+        frames: s.frames,
+        intrinsics: [i.fx, i.fy, i.ppx, i.ppy],
+        distortion: format!("{:?}", i.model),
+    }
+}
+
+impl OpenRecording {
+    /// Opens the recording at `path`, seeking in it, never reading it whole.
+    pub fn open(path: &Path, options: &RecordingOptions) -> Result<Self, SequenceError> {
+        let name = path.display().to_string();
+        let wrap = |source| SequenceError::Recording {
+            path: name.clone(),
+            source,
+        };
+        let bytes: Box<dyn ByteSource> = Box::new(FileBytes::open(path).map_err(wrap)?);
+        let rec = Recording::open(bytes, options).map_err(wrap)?;
+        if rec.is_empty() {
+            return Err(SequenceError::invalid(
+                &name,
+                format!(
+                    "no colour frame has a depth frame within half a frame period ({} colour, {} depth frames)",
+                    rec.color.frames, rec.depth.frames
+                ),
+            ));
+        }
+        Ok(Self { rec, name })
+    }
+
+    /// The colour camera as the tracker sees it (pinhole; distortion is not modelled).
+    pub fn camera(&self) -> Result<CameraIntrinsics, SequenceError> {
+        let i = self.rec.color.intrinsics;
+        let camera = CameraIntrinsics {
+            width: i.width,
+            height: i.height,
+            fx: f64::from(i.fx),
+            fy: f64::from(i.fy),
+            cx: f64::from(i.ppx),
+            cy: f64::from(i.ppy),
+        };
+        camera
+            .validate()
+            .map_err(|e| SequenceError::invalid(&self.name, e.to_string()))?;
+        Ok(camera)
+    }
+
+    /// Metres per depth unit.
+    pub fn depth_units(&self) -> f64 {
+        self.rec.depth_units
+    }
+
+    /// The colour stream's frame rate.
+    pub fn fps(&self) -> f64 {
+        self.rec.color.fps
+    }
+
+    /// Paired frames.
+    pub fn len(&self) -> usize {
+        self.rec.len()
+    }
+
+    /// `true` when there are no paired frames (never, once opened).
+    pub fn is_empty(&self) -> bool {
+        self.rec.is_empty()
+    }
+
+    /// How frame `index` is named in messages.
+    pub fn frame_name(&self, index: usize) -> String {
+        let ms = self.rec.time_ns(index).unwrap_or(0) as f64 / 1e6;
+        format!("{}: frame {index} ({ms:.1} ms)", self.name)
+    }
+
+    /// Decodes frame `index`, depth aligned to colour.
+    pub fn frame(&mut self, index: usize) -> Result<DecodedFrame, SequenceError> {
+        let f = self
+            .rec
+            .frame(index)
+            .map_err(|source| SequenceError::Recording {
+                path: self.name.clone(),
+                source,
+            })?;
+        Ok(DecodedFrame {
+            width: f.width,
+            height: f.height,
+            color: f.color,
+            depth: f.depth,
+        })
+    }
+
+    /// Streams, pairing and warnings.
+    pub fn info(&self) -> RecordingInfo {
+        let r = &self.rec;
+        RecordingInfo {
+            path: self.name.clone(),
+            layout: match r.layout {
+                upetrack_recordings::recording::Layout::Librealsense => "librealsense".into(),
+                upetrack_recordings::recording::Layout::Ros => "ros".into(),
+            },
+            color: stream_info(&r.color),
+            depth: stream_info(&r.depth),
+            aligned_on_reading: r.depth_to_color.is_some(),
+            depth_units: r.depth_units,
+            paired_frames: r.len(),
+            unpaired_color: r.unpaired_color,
+            unpaired_depth: r.unpaired_depth,
+            image_topics: r.topics.clone(),
+            warnings: r.warnings().to_vec(),
+        }
+    }
+}
+
+/// A recording with its configuration: `dlo` is a `dlo.json` (any name); a
+/// ground-truth file it names is read from beside it.
+pub fn open_recording(
+    path: &Path,
+    dlo: Option<&Path>,
+    options: &RecordingOptions,
+) -> Result<Sequence<Box<dyn Source>>, SequenceError> {
+    let rec = OpenRecording::open(path, options)?;
+    let mut files = MemorySource::new(path.display().to_string());
+    if let Some(dlo) = dlo {
+        let shown = dlo.display().to_string();
+        let dir = dlo.parent().unwrap_or(Path::new(""));
+        let folder = FolderSource::new(dir);
+        let file_name = dlo.file_name().and_then(|n| n.to_str()).unwrap_or("");
+        let bytes = folder.read(file_name)?;
+        let config = crate::sequence::DloConfig::parse(&bytes, &shown)?;
+        files = MemorySource::new(dir.display().to_string());
+        if let Some(gt) = &config.groundtruth {
+            if !is_inside_name(gt) {
+                return Err(SequenceError::invalid(
+                    &shown,
+                    format!("groundtruth `{gt}` must be a path inside the configuration's folder"),
+                ));
+            }
+            if folder.is_file(gt) {
+                files.insert(gt, folder.read(gt)?);
+            }
+        }
+        files.insert("dlo.json", bytes);
+    }
+    Sequence::from_recording(Box::new(files) as Box<dyn Source>, rec)
+}
