@@ -35,12 +35,7 @@ fn track<S: Source>(seq: &Sequence<S>) -> TrackResult {
     track_sequence(seq, Params::default(), &mut || 0.0).expect("tracks")
 }
 
-fn mean_error_mm<S: Source>(
-    seq: &Sequence<S>,
-    result: &TrackResult,
-    truth: &Sequence<impl Source>,
-) -> f64 {
-    let _ = seq;
+fn mean_error_mm(result: &TrackResult, truth: &Sequence<impl Source>) -> f64 {
     let e = frame_errors(result, &truth.groundtruth, &truth.camera);
     assert_eq!(e.len(), result.frames.len());
     e.iter().map(|e| e.mm).sum::<f64>() / e.len() as f64
