@@ -21,7 +21,9 @@ From one synthetic scene (`upetrack synth dynamic-pull`, 8 frames, halved to
   (/camera/color/image_raw bgr8, /camera/aligned_depth_to_color/image_raw
   16UC1 in mm, their camera_info) written by `rosbags`, one per chunk
   compression (8, 4 and 3 frames);
-- dlo.json: the colour range and occluder of the scene, for `--dlo`.
+- dlo.json: the colour range and occluder of the scene, for `--dlo`;
+- fuzz/seeds/rosbag/: the same writers at 16x12 pixels, 2 frames, as seeds
+  for the bag reader's fuzz target.
 """
 
 import json
@@ -112,10 +114,10 @@ def depth_imager_view(cam, depth):
     return out.astype(np.uint16)
 
 
-def write_librealsense(cam, colors, depths):
+def write_librealsense(cam, colors, depths, path=None, compress=True):
     import pyrealsense2 as rs
 
-    path = OUT / "librealsense.bag"
+    path = path or OUT / "librealsense.bag"
     w, h = cam["width"], cam["height"]
     dev = rs.software_device()
     depth_sensor = dev.add_sensor("Stereo Module")
@@ -140,14 +142,14 @@ def write_librealsense(cam, colors, depths):
     ex.rotation = [float(v) for v in rotation_y(TURN_DEG).T.flatten()]  # column-major
     ex.translation = BASELINE
     profiles[0].register_extrinsics_to(profiles[1], ex)
-    recorder = rs.recorder(str(path), dev, True)
+    recorder = rs.recorder(str(path), dev, compress)
     queue = rs.frame_queue(64)
     depth_sensor.open(profiles[0])
     color_sensor.open(profiles[1])
     depth_sensor.start(queue)
     color_sensor.start(queue)
     keep = []
-    for i in range(FRAMES):
+    for i in range(len(colors)):
         d = np.ascontiguousarray(depth_imager_view(cam, depths[i]))
         c = np.ascontiguousarray(colors[i])
         keep += [d, c]
@@ -190,7 +192,7 @@ def write_goldens(path):
     print(f"{n} aligned goldens")
 
 
-def write_ros(cam, colors, depths):
+def write_ros(cam, colors, depths, out=None, sizes=None):
     from rosbags.rosbag1 import Writer
     from rosbags.typesys import Stores, get_typestore
 
@@ -202,9 +204,10 @@ def write_ros(cam, colors, depths):
     k = np.array([cam["fx"], 0, cam["cx"], 0, cam["fy"], cam["cy"], 0, 0, 1], dtype=np.float64)
     p = np.array([cam["fx"], 0, cam["cx"], 0, 0, cam["fy"], cam["cy"], 0, 0, 0, 1, 0], dtype=np.float64)
     # Frames per file: the uncompressed ones are cut short to stay under 2 MB.
-    for name, comp, frames in [("bz2", Writer.CompressionFormat.BZ2, FRAMES),
-                               ("lz4", Writer.CompressionFormat.LZ4, 4), ("none", None, 3)]:
-        path = OUT / f"ros_{name}.bag"
+    for name, comp, frames in [("bz2", Writer.CompressionFormat.BZ2, (sizes or [FRAMES])[0]),
+                               ("lz4", Writer.CompressionFormat.LZ4, (sizes or [0, 4])[1]),
+                               ("none", None, (sizes or [0, 0, 3])[2])]:
+        path = (out or OUT) / f"ros_{name}.bag"
         path.unlink(missing_ok=True)
         wr = Writer(path)
         if comp is not None:
@@ -235,6 +238,22 @@ def write_ros(cam, colors, depths):
                     wr.write(topics[f"{topic}/camera_info"], stamp, ts.serialize_ros1(info, Info.__msgtype__))
 
 
+def write_seeds(cam, colors, depths):
+    seeds = ROOT / "fuzz" / "seeds" / "rosbag"
+    seeds.mkdir(parents=True, exist_ok=True)
+    small = dict(width=16, height=12, fx=cam["fx"] / 20, fy=cam["fy"] / 20,
+                 cx=(cam["cx"] + 0.5) / 20 - 0.5, cy=(cam["cy"] + 0.5) / 20 - 0.5)
+    c = [x[::20, ::20].copy() for x in colors[:2]]
+    d = [x[::20, ::20].copy() for x in depths[:2]]
+    write_ros(small, c, d, out=seeds, sizes=[2, 2, 2])
+    global DEPTH_FX, DEPTH_PPX, DEPTH_PPY
+    saved = (DEPTH_FX, DEPTH_PPX, DEPTH_PPY)
+    DEPTH_FX, DEPTH_PPX, DEPTH_PPY = 10.0, 8.1, 5.9
+    write_librealsense(small, c, d, path=seeds / "librealsense_lz4.bag", compress=True)
+    write_librealsense(small, c, d, path=seeds / "librealsense_none.bag", compress=False)
+    DEPTH_FX, DEPTH_PPX, DEPTH_PPY = saved
+
+
 def main():
     OUT.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
@@ -244,6 +263,7 @@ def main():
     bag = write_librealsense(cam, colors, depths)
     write_goldens(bag)
     write_ros(cam, colors, depths)
+    write_seeds(cam, colors, depths)
     for f in sorted(OUT.rglob("*")):
         if f.is_file():
             print(f"{f.relative_to(ROOT)}: {f.stat().st_size} bytes")

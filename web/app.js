@@ -2,14 +2,14 @@
 // (playback.js), drawing (draw.js), the plot (plot.js), the panels
 // (panels.js) and export (export.js) run the tracker in a Web Worker
 // (worker.js, protocol.js); the core's rules come through core.js.
-import { state, $, guarded, showError, ALGORITHM_NAMES } from './state.js';
+import { state, $, guarded, showError, showNote, ALGORITHM_NAMES } from './state.js';
 import { call } from './worker-client.js';
 import { Request } from './protocol.js';
 import { ready as coreReady } from './core.js';
-import { hooks, loadSample, openFiles, openZip, entryFiles } from './sequence.js';
+import { hooks, loadSample, openFiles, openZip, openRecording, entryFiles } from './sequence.js';
 import { goTo, play, updatePlayButton, SPEEDS } from './playback.js';
-import { bindPanels, setParamInputs, setHsvInputs, renderRects, addRect, pickAt } from './panels.js';
-import { resultJson, download } from './export.js';
+import { bindPanels, setParamInputs, setHsvInputs, renderRects, addRect, pickAt, setMode } from './panels.js';
+import { resultJson, dloJson, download } from './export.js';
 
 hooks.opened = async () => {
   const info = state.seq.info;
@@ -20,6 +20,17 @@ hooks.opened = async () => {
   $('canvas').width = info.camera.width;
   $('canvas').height = info.camera.height;
   await goTo(0);
+  const d = state.seq.details;
+  $('seq-details').textContent = d
+    ? `${d.layout} recording: ${d.paired_frames} frames ${d.color.width}x${d.color.height}, depth ${d.aligned_on_reading ? 'aligned to colour here' : 'already aligned'}` +
+      (d.unpaired_color + d.unpaired_depth ? `; ${d.unpaired_color} colour and ${d.unpaired_depth} depth frames unpaired` : '') +
+      (d.warnings.length ? `; ${d.warnings.join('; ')}` : '')
+    : '';
+  // A recording has no dlo.json: the rope's colour is picked by a click.
+  if (state.seq.fromRecording && !state.seq.configured) {
+    setMode('pick', true);
+    showNote('Click the rope to take its colour; save the setup with "Save dlo.json".');
+  }
 };
 
 $('message-close').onclick = () => { $('message').hidden = true; };
@@ -30,6 +41,13 @@ $('folder').onchange = guarded(async (e) => {
   e.target.value = '';
   if (!files.length) throw new Error('The folder is empty.');
   await openFiles(files, 'folder');
+});
+$('recording').onchange = guarded(async (e) => {
+  const files = [...e.target.files];
+  e.target.value = '';
+  const bag = files.find((f) => /\.bag$/i.test(f.name));
+  if (!bag) throw new Error('Pick a .bag recording (and, optionally, its dlo.json).');
+  await openRecording(bag, files.find((f) => /\.json$/i.test(f.name)) || null);
 });
 $('zip').onchange = guarded(async (e) => {
   const f = e.target.files[0];
@@ -65,6 +83,11 @@ $('export').onclick = guarded(async () => {
   await goTo(state.seq.info.color_files.length - 1);
   await goTo(here);
   download(`${state.seq.name.replace(/\.zip$/i, '')}.result.json`, resultJson());
+});
+
+$('save-dlo').onclick = guarded(async () => {
+  if (!state.seq) return;
+  download(`${state.seq.name.replace(/\.(zip|bag)$/i, '')}.dlo.json`, dloJson());
 });
 
 // ---------- start ----------
@@ -123,6 +146,7 @@ window.upetrack = {
   resultJson,
   addRect,
   pickAt,
+  dloJson,
   trackAll: async () => { await goTo(state.seq.info.color_files.length - 1); return resultJson(); },
   ready: guarded(start)(),
 };

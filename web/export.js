@@ -15,6 +15,20 @@ export function resultJson() {
   };
 }
 
+// The configuration in force as a dlo.json: the colour range, the
+// sequence's occluders and those drawn (for every frame), depth scale and
+// frame rate. Saved beside a recording, it is what `upetrack track REC --dlo` reads.
+export function dloJson() {
+  const info = state.seq.info;
+  const last = info.color_files.length - 1;
+  return {
+    depth_scale: info.depth_scale,
+    fps: info.fps,
+    segmentation: { hsv_lower: state.hsv.lower, hsv_upper: state.hsv.upper },
+    occlusions: [...info.occlusions, ...state.userRects.map((r) => ({ frames: [0, last], rect: r }))],
+  };
+}
+
 export function download(name, object) {
   const blob = new Blob([JSON.stringify(object)], { type: 'application/json' });
   const a = document.createElement('a');

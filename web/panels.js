@@ -67,8 +67,9 @@ function imagePoint(e) {
   return [Math.round(((e.clientX - b.left) / b.width) * canvas.width), Math.round(((e.clientY - b.top) / b.height) * canvas.height)];
 }
 
-function setMode(mode) {
-  state.mode = state.mode === mode ? 'none' : mode;
+// Toggles `mode` ('draw' or 'pick'); `on` forces it on.
+export function setMode(mode, on = false) {
+  state.mode = state.mode === mode && !on ? 'none' : mode;
   $('draw-mode').classList.toggle('active', state.mode === 'draw');
   $('pick-mode').classList.toggle('active', state.mode === 'pick');
   canvas.classList.toggle('drawing', state.mode === 'draw');
@@ -134,6 +135,7 @@ export function bindPanels() {
       const [x, y] = imagePoint(e);
       setMode('pick');
       await pickAt(x, y);
+      if (state.note) $('message').hidden = true;
       return;
     }
     if (!dragStart) return;

@@ -11,9 +11,11 @@
 // restore    snapshot ({main, second} or null)               {}
 // zip        bytes (transferred), name                       { names }
 // zipRead    path                                            { bytes }
+// recording  file (a File, not copied), name, dlo (text|null)  { info, details }; while the index is
+//                                                              read: { id, progress: [offset, length] }
 // frame      index, track, color, depth, colorName,          { index, width, height, decodeMs, rgba,
-//            depthName, fromZip, depthScale, occlusions,       [nodes, nodesPx, visible, status, reason,
-//            groundtruth, wantMask, wantDepth                   trackMs, totalMs, error, second, snapshot,
+//            depthName, fromZip, fromRecording, depthScale,    [nodes, nodesPx, visible, status, reason,
+//            occlusions, groundtruth, wantMask, wantDepth       trackMs, totalMs, error, second, snapshot,
 //                                                               mask], [depth (RGBA ramp)] }
 
 export const Request = {
@@ -25,9 +27,11 @@ export const Request = {
   restore: (snapshot) => ({ type: 'restore', snapshot }),
   zip: (bytes, name) => ({ type: 'zip', bytes, name }),
   zipRead: (path) => ({ type: 'zipRead', path }),
+  recording: (file, name, dlo) => ({ type: 'recording', file, name, dlo }),
   frame: (f) => ({
     type: 'frame', index: f.index, track: f.track, color: f.color, depth: f.depth,
-    colorName: f.colorName, depthName: f.depthName, fromZip: f.fromZip, depthScale: f.depthScale,
+    colorName: f.colorName, depthName: f.depthName, fromZip: f.fromZip,
+    fromRecording: f.fromRecording, depthScale: f.depthScale,
     occlusions: f.occlusions, groundtruth: f.groundtruth, wantMask: f.wantMask, wantDepth: f.wantDepth,
   }),
 };

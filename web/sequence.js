@@ -20,9 +20,31 @@ async function openSequence(name, paths, read, fromZip = false) {
   }
   const images = paths.filter((p) => /^(color|rgb|image|depth)\/[^/]+$/i.test(p));
   const { info } = await call(Request.info(name, json, images));
+  await finishOpening(generation, { name, info, read, fromZip, fromRecording: false });
+}
+
+// Camera recordings the page reads (ROS1 bag 2.0: RealSense Viewer, rs-record, realsense-ros).
+export const isRecording = (name) => /\.bag$/i.test(name);
+
+// A recording, with an optional dlo.json picked or dropped beside it. The
+// worker reads the file in slices; without a dlo.json, the user picks the
+// rope's colour by clicking it.
+export async function openRecording(file, dloFile) {
+  const generation = ++state.generation;
+  state.playing = false;
+  progress(0, 1);
+  const dlo = dloFile ? await dloFile.text() : null;
+  const { info, details } = await call(Request.recording(file, file.name, dlo));
+  await finishOpening(generation, {
+    name: file.name, info, details, read: null, fromZip: false, fromRecording: true, configured: !!dloFile,
+  });
+}
+
+async function finishOpening(generation, seq) {
+  const { info } = seq;
   await call(Request.open(info.camera, state.params, info.hsv, state.compare));
   if (generation !== state.generation) return;
-  state.seq = { name, info, read, fromZip };
+  state.seq = seq;
   state.hsv = info.hsv;
   state.index = 0;
   state.tracked = -1;
@@ -49,6 +71,12 @@ export async function loadSample(name, index) {
 export async function openFiles(files, label) {
   const zip = files.find((f) => f.path.toLowerCase().endsWith('.zip'));
   if (zip && files.length === 1) return openZip(zip.file);
+  const rec = files.filter((f) => isRecording(f.path));
+  if (rec.length === 1 && files.length <= 2) {
+    const other = files.find((f) => f !== rec[0]);
+    if (other && !/\.json$/i.test(other.path)) throw new Error(`${other.path}: open a recording alone or with its dlo.json`);
+    return openRecording(rec[0].file, other ? other.file : null);
+  }
   const paths = files.map((f) => f.path.split('/').filter(Boolean).join('/'));
   const root = commonRoot(paths);
   const cut = root ? root.length + 1 : 0;
@@ -132,7 +160,7 @@ export async function requestFrame(i, track) {
   let color = null;
   let depth = null;
   const transfer = [];
-  if (!seq.fromZip) {
+  if (!seq.fromZip && !seq.fromRecording) {
     [color, depth] = await readPair(i);
     transfer.push(color, depth);
     // Read the next frame's files while this one is decoded and tracked.
@@ -140,7 +168,7 @@ export async function requestFrame(i, track) {
   }
   return call(Request.frame({
     index: i, track, color, depth, colorName: info.color_files[i], depthName: info.depth_files[i],
-    fromZip: seq.fromZip, depthScale: info.depth_scale, occlusions: activeRects(i),
+    fromZip: seq.fromZip, fromRecording: seq.fromRecording, depthScale: info.depth_scale, occlusions: activeRects(i),
     groundtruth: info.groundtruth[i], wantMask: $('show-mask').checked, wantDepth: $('show-depth').checked,
   }), transfer);
 }

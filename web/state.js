@@ -6,7 +6,7 @@ export const $ = (id) => document.getElementById(id);
 export const ALGORITHM_NAMES = { upetrack: 'UPETrack', cpd: 'CPD', trackdlo: 'TrackDLO', cdcpd2: 'CDCPD2' };
 
 export const state = {
-  seq: null,          // { name, info, read(path), fromZip }
+  seq: null,          // { name, info, read(path), fromZip, fromRecording, details, configured }
   index: 0,           // frame shown
   tracked: -1,        // last frame tracked (frames are tracked in order)
   results: [],        // per frame: { nodes, nodesPx, visible, status, reason, trackMs, totalMs, error, snapshot, second }
@@ -24,13 +24,22 @@ export const state = {
   epoch: 0,           // bumped when settings change; a look-ahead from an older epoch is dropped
   lookahead: null,    // { index, epoch, generation, promise } of the next frame, while playing
   errors: [],         // every message shown in the banner, for scripts and tests
+  note: false,        // the banner shows a hint (showNote), not an error
 };
 
 export function showError(text) {
+  state.note = false;
   $('message-text').textContent = text;
   $('message').hidden = false;
   state.errors.push(text);
   console.error(text);
+}
+
+// A hint in the banner that is not an error.
+export function showNote(text) {
+  state.note = true;
+  $('message-text').textContent = text;
+  $('message').hidden = false;
 }
 
 export function progress(value, max) {

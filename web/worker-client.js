@@ -1,5 +1,5 @@
 // The page's side of the worker: one request, one promise.
-import { showError } from './state.js';
+import { showError, progress } from './state.js';
 
 const worker = new Worker('./worker.js', { type: 'module' });
 const pending = new Map();
@@ -7,6 +7,7 @@ let nextId = 1;
 worker.onmessage = (e) => {
   const p = pending.get(e.data.id);
   if (!p) return;
+  if (e.data.progress) { progress(e.data.progress[0], e.data.progress[1]); return; }
   pending.delete(e.data.id);
   if (e.data.ok) p.resolve(e.data); else p.reject(new Error(e.data.error));
 };

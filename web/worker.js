@@ -2,7 +2,7 @@
 // .zip) and tracking both happen in WebAssembly. Requests and replies are
 // those of protocol.js.
 import init, {
-  WasmTracker, decodeFrame, Archive, readSequenceInfo, defaultParams, parseParams, depthRgba,
+  WasmTracker, decodeFrame, Archive, Recording, readSequenceInfo, defaultParams, parseParams, depthRgba,
 } from './pkg/upetrack_wasm.js';
 import { Request } from './protocol.js';
 
@@ -11,6 +11,7 @@ let tracker = null;
 let second = null;          // the tracker of the compared algorithm, if any
 let secondAlgorithm = null;
 let archive = null;
+let recording = null;
 
 // Parameters checked by the core, as the command checks a --params file.
 const checked = (params) => parseParams(JSON.stringify(params));
@@ -28,14 +29,23 @@ function track(t, f, m) {
   return out;
 }
 
-function frame(m) {
+// Frame m.index decoded: from a recording, or from its two image files.
+function decode(m) {
+  if (m.fromRecording) {
+    if (!recording) throw new Error('no recording is open');
+    return recording.frame(m.index);
+  }
   let color = m.color, depth = m.depth;
   if (archive && m.fromZip) {
     color = archive.read(m.colorName).buffer;
     depth = archive.read(m.depthName).buffer;
   }
+  return decodeFrame(new Uint8Array(color), m.colorName, new Uint8Array(depth), m.depthName);
+}
+
+function frame(m) {
   const t0 = performance.now();
-  const f = decodeFrame(new Uint8Array(color), m.colorName, new Uint8Array(depth), m.depthName);
+  const f = decode(m);
   const decodeMs = performance.now() - t0;
   const rgba = f.rgba;
   const out = { index: m.index, width: f.width, height: f.height, decodeMs, rgba: rgba.buffer };
@@ -69,6 +79,13 @@ const handlers = {
     return { names: archive.names() };
   },
   zipRead: (m) => ({ bytes: archive.read(m.path).buffer }),
+  recording: (m) => {
+    if (recording) recording.free();
+    recording = null;
+    const report = (offset, length) => postMessage({ id: m.id, progress: [offset, length] });
+    recording = new Recording(m.file, m.name, m.dlo, report);
+    return { info: recording.info(), details: recording.details() };
+  },
   info: (m) => {
     const json = {};
     for (const [k, v] of Object.entries(m.json)) json[k] = new Uint8Array(v);

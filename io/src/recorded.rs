@@ -92,12 +92,25 @@ impl OpenRecording {
     /// Opens the recording at `path`, seeking in it, never reading it whole.
     pub fn open(path: &Path, options: &RecordingOptions) -> Result<Self, SequenceError> {
         let name = path.display().to_string();
-        let wrap = |source| SequenceError::Recording {
+        let bytes = FileBytes::open(path).map_err(|source| SequenceError::Recording {
             path: name.clone(),
             source,
-        };
-        let bytes: Box<dyn ByteSource> = Box::new(FileBytes::open(path).map_err(wrap)?);
-        let rec = Recording::open(bytes, options).map_err(wrap)?;
+        })?;
+        Self::from_source(Box::new(bytes), &name, options)
+    }
+
+    /// Opens a recording from any byte source (the page's `Blob` reader);
+    /// `name` appears in messages.
+    pub fn from_source(
+        bytes: Box<dyn ByteSource>,
+        name: &str,
+        options: &RecordingOptions,
+    ) -> Result<Self, SequenceError> {
+        let name = name.to_string();
+        let rec = Recording::open(bytes, options).map_err(|source| SequenceError::Recording {
+            path: name.clone(),
+            source,
+        })?;
         if rec.is_empty() {
             return Err(SequenceError::invalid(
                 &name,
@@ -192,6 +205,15 @@ impl OpenRecording {
     }
 }
 
+/// The sequence of `rec`, configured by the `dlo.json` (and the ground truth
+/// it names) that `config` holds; an empty `config` takes the defaults.
+pub fn recording_sequence<S: Source>(
+    config: S,
+    rec: OpenRecording,
+) -> Result<Sequence<S>, SequenceError> {
+    Sequence::from_recording(config, rec)
+}
+
 /// A recording with its configuration: `dlo` is a `dlo.json` (any name); a
 /// ground-truth file it names is read from beside it.
 pub fn open_recording(
@@ -222,5 +244,5 @@ pub fn open_recording(
         }
         files.insert("dlo.json", bytes);
     }
-    Sequence::from_recording(Box::new(files) as Box<dyn Source>, rec)
+    recording_sequence(Box::new(files) as Box<dyn Source>, rec)
 }

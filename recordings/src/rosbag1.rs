@@ -220,7 +220,9 @@ fn decompress(
             max: u64::from(MAX_CHUNK_BYTES),
         });
     }
-    let mut out = Vec::with_capacity(size as usize);
+    // Reserved up to a plausible ratio only: a tiny corrupt chunk declaring
+    // a huge size grows its buffer as data actually comes out.
+    let mut out = Vec::with_capacity((size as usize).min(data.len().saturating_mul(8) + 4096));
     // One byte more than declared is read, so a chunk longer than it says is caught.
     let limit = u64::from(size) + 1;
     let result = match compression {

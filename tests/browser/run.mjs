@@ -359,6 +359,70 @@ await test('out-of-range input is refused with the command\'s message, never wra
   await page.close();
 });
 
+// Recordings made by the real writers (scripts/make_recordings.py).
+const recordings = path.join(root, 'tests/recordings');
+function nativeTrack(args, name) {
+  const out = path.join(tmp, `${name}.json`);
+  execFileSync(native, ['track', ...args, '--out', out]);
+  return JSON.parse(fs.readFileSync(out, 'utf8'));
+}
+function worstDifference(web, ref) {
+  assert(web.frames.length === ref.frames.length, `frame counts ${web.frames.length} vs ${ref.frames.length}`);
+  let worst = 0;
+  ref.frames.forEach((f, k) => f.nodes.forEach((p, j) => p.forEach((c, d) => { worst = Math.max(worst, Math.abs(c - web.frames[k].nodes[j][d])); })));
+  return worst;
+}
+
+await test('a RealSense Viewer .bag opens by file input with its dlo.json, seeks, and tracks as the command does', async () => {
+  const page = await newPage('?autoplay=0');
+  await page.setInputFiles('#recording', [path.join(recordings, 'librealsense.bag'), path.join(recordings, 'reference/dlo.json')]);
+  await page.waitForFunction(() => window.upetrack.state.seq && window.upetrack.state.seq.fromRecording && window.upetrack.state.tracked >= 0, null, { timeout: 30000 });
+  assert((await messageOf(page)) === '', await messageOf(page));
+  const details = await page.evaluate(() => document.getElementById('seq-details').textContent);
+  assert(/librealsense recording: 8 frames 320x240, depth aligned to colour here/.test(details), details);
+  await page.evaluate(() => window.upetrack.goTo(5));
+  const seek = await page.evaluate(() => ({ index: window.upetrack.state.index, w: window.upetrack.state.frame.width, timeline: document.getElementById('timeline').value }));
+  assert(seek.index === 5 && seek.w === 320 && seek.timeline === '5', `seek: ${JSON.stringify(seek)}`);
+  await page.screenshot({ path: path.join(artifacts, 'recording.png') });
+  const web = await page.evaluate(() => window.upetrack.trackAll());
+  const ref = nativeTrack([path.join(recordings, 'librealsense.bag'), '--dlo', path.join(recordings, 'reference/dlo.json')], 'rec-native');
+  const worst = worstDifference(web, ref);
+  console.log(`     .bag on the page vs the command: largest difference ${worst.toExponential(2)} m over ${ref.frames.length} frames`);
+  assert(worst === 0, `largest difference ${worst}`);
+  await page.close();
+});
+
+await test('a realsense-ros .bag without dlo.json: the rope colour is picked by a click, tracked, and saved as dlo.json', async () => {
+  const page = await newPage('?autoplay=0');
+  await page.setInputFiles('#recording', path.join(recordings, 'ros_bz2.bag'));
+  await page.waitForFunction(() => window.upetrack.state.seq && window.upetrack.state.seq.fromRecording && window.upetrack.state.frame, null, { timeout: 30000 });
+  const hint = await messageOf(page);
+  assert(/Click the rope/.test(hint), `no hint to click: ${hint}`);
+  assert((await page.evaluate(() => window.upetrack.state.mode)) === 'pick', 'not in pick mode');
+  // A point on the rope in frame 0: the middle of the reference's ground truth, projected.
+  const gt = JSON.parse(fs.readFileSync(path.join(recordings, 'reference/groundtruth.json'), 'utf8')).frames[0].points;
+  const cam = JSON.parse(fs.readFileSync(path.join(recordings, 'reference/camera_intrinsic.json'), 'utf8')).intrinsic_matrix;
+  const [x, y, z] = gt[gt.length >> 1];
+  const u = cam[0] * x / z + cam[6], v = cam[4] * y / z + cam[7];
+  const box = await page.locator('#canvas').boundingBox();
+  const before = await page.evaluate(() => JSON.stringify(window.upetrack.state.hsv));
+  await page.mouse.click(box.x + (u + 0.5) * box.width / 320, box.y + (v + 0.5) * box.height / 240);
+  await page.waitForFunction((b) => JSON.stringify(window.upetrack.state.hsv) !== b, before, { timeout: 10000 });
+  assert((await messageOf(page)) === '', `the hint stays after the pick: ${await messageOf(page)}`);
+  const web = await page.evaluate(() => window.upetrack.trackAll());
+  const lost = web.frames.filter((f) => f.lost).length;
+  assert(lost === 0, `${lost} frames lost after picking the colour`);
+  const dlo = await page.evaluate(() => window.upetrack.dloJson());
+  const dloPath = path.join(tmp, 'picked.dlo.json');
+  fs.writeFileSync(dloPath, JSON.stringify(dlo));
+  const ref = nativeTrack([path.join(recordings, 'ros_bz2.bag'), '--dlo', dloPath], 'picked-native');
+  const worst = worstDifference(web, ref);
+  console.log(`     picked ${JSON.stringify(dlo.segmentation)}; the command with the saved dlo.json: largest difference ${worst.toExponential(2)} m`);
+  assert(worst === 0, `largest difference ${worst}`);
+  await page.screenshot({ path: path.join(artifacts, 'recording-picked.png') });
+  await page.close();
+});
+
 await test('embed=1 shows the image and the transport only', async () => {
   const page = await newPage('?autoplay=0&embed=1');
   const shown = await page.evaluate(() => Object.fromEntries(['loaders', 'side', 'stats', 'plot', 'display', 'transport', 'canvas']

@@ -13,6 +13,8 @@ use upetrack_io::sequence::{DloConfig, OcclusionConfig, Sequence};
 use upetrack_io::source::{MemorySource, Source};
 use wasm_bindgen::prelude::*;
 
+mod recording;
+
 fn js_err(e: impl std::fmt::Display) -> JsError {
     JsError::new(&e.to_string())
 }
@@ -427,6 +429,11 @@ pub fn read_sequence_info(
         source.insert(img, Vec::new());
     }
     let seq = Sequence::open(source).map_err(js_err)?;
+    sequence_info(&seq)
+}
+
+/// The page's view of an opened sequence (a folder's or a recording's).
+fn sequence_info<S: Source>(seq: &Sequence<S>) -> Result<JsValue, JsError> {
     let info = SequenceInfo {
         camera: seq.camera,
         depth_scale: seq.depth_scale,
