@@ -160,7 +160,9 @@ def main(dirs):
 if __name__ == "__main__":
     here = os.path.dirname(os.path.abspath(__file__))
     root = os.path.dirname(here)
-    dirs = sys.argv[1:] or [
-        os.path.join(root, c) for c in ("core", "io", "synth", "cli", "wasm")
-    ]
+    # Every member of the workspace, as Cargo.toml lists them.
+    with open(os.path.join(root, "Cargo.toml"), encoding="utf-8") as f:
+        members = re.search(r"^members\s*=\s*\[([^\]]*)\]", f.read(), re.M)
+    crates = re.findall(r'"([^"]+)"', members.group(1)) if members else []
+    dirs = sys.argv[1:] or [os.path.join(root, c) for c in crates]
     sys.exit(main(dirs))

@@ -4,7 +4,8 @@
 use std::path::Path;
 use std::time::Instant;
 
-use upetrack_io::recorded::{OpenRecording, RecordingInfo};
+use upetrack_io::recorded::OpenRecording;
+use upetrack_io::recording_info::RecordingInfo;
 
 use crate::{open_sequence, with_recording_options, Args, CliError, RecordingArgs, USAGE};
 

@@ -13,6 +13,7 @@ pub mod export;
 pub mod open;
 pub mod params_file;
 pub mod recorded;
+pub mod recording_info;
 pub mod result;
 pub mod run;
 pub mod sequence;

@@ -4,12 +4,12 @@
 
 use std::path::Path;
 
-use serde::Serialize;
 use upetrack::CameraIntrinsics;
 use upetrack_recordings::{ByteSource, FileBytes, Recording, RecordingOptions};
 
 use crate::error::SequenceError;
-use crate::sequence::{DecodedFrame, Sequence};
+use crate::recording_info::{RecordingInfo, StreamInfo};
+use crate::sequence::{DecodedFrame, FrameReader, Sequence};
 use crate::source::{is_inside_name, FolderSource, MemorySource, Source};
 
 /// `true` when the file at `path` starts like a recording this project reads.
@@ -27,52 +27,6 @@ pub fn is_recording_file(path: &Path) -> bool {
 pub struct OpenRecording {
     rec: Recording<Box<dyn ByteSource>>,
     name: String,
-}
-
-/// What a recording holds, as `upetrack info` shows it.
-#[derive(Debug, Clone, Serialize)]
-pub struct RecordingInfo {
-    /// The file.
-    pub path: String,
-    /// `librealsense` or `ros`.
-    pub layout: String,
-    /// The colour stream.
-    pub color: StreamInfo,
-    /// The depth stream.
-    pub depth: StreamInfo,
-    /// Depth is in the depth imager's frame and is aligned to colour on reading.
-    pub aligned_on_reading: bool,
-    /// Metres per depth unit.
-    pub depth_units: f64,
-    /// Colour frames with a depth frame within half a period.
-    pub paired_frames: usize,
-    /// Colour frames left without depth.
-    pub unpaired_color: usize,
-    /// Depth frames left without colour.
-    pub unpaired_depth: usize,
-    /// Every image topic: name, message type, messages.
-    pub image_topics: Vec<(String, String, usize)>,
-    /// What the reader could not read.
-    pub warnings: Vec<String>,
-}
-
-/// One stream of [`RecordingInfo`].
-#[derive(Debug, Clone, Serialize)]
-pub struct StreamInfo {
-    /// Topic.
-    pub topic: String,
-    /// Columns.
-    pub width: u32,
-    /// Rows.
-    pub height: u32,
-    /// Frame rate.
-    pub fps: f64,
-    /// Messages.
-    pub frames: usize,
-    /// `fx, fy, ppx, ppy`.
-    pub intrinsics: [f32; 4],
-    /// Distortion model.
-    pub distortion: String,
 }
 
 fn stream_info(s: &upetrack_recordings::recording::Stream) -> StreamInfo {
@@ -205,13 +159,26 @@ impl OpenRecording {
     }
 }
 
+impl FrameReader for OpenRecording {
+    fn frame(&mut self, index: usize) -> Result<DecodedFrame, SequenceError> {
+        OpenRecording::frame(self, index)
+    }
+
+    fn info(&self) -> RecordingInfo {
+        OpenRecording::info(self)
+    }
+}
+
 /// The sequence of `rec`, configured by the `dlo.json` (and the ground truth
 /// it names) that `config` holds; an empty `config` takes the defaults.
 pub fn recording_sequence<S: Source>(
     config: S,
     rec: OpenRecording,
 ) -> Result<Sequence<S>, SequenceError> {
-    Sequence::from_recording(config, rec)
+    let camera = rec.camera()?;
+    let names = (0..rec.len()).map(|i| rec.frame_name(i)).collect();
+    let rates = (1.0 / rec.depth_units(), rec.fps());
+    Sequence::with_reader(config, camera, rates, names, Box::new(rec))
 }
 
 /// A recording with its configuration: `dlo` is a `dlo.json` (any name); a

@@ -9,6 +9,7 @@ use upetrack::{CameraIntrinsics, Frame, HsvRange, Rect};
 
 use crate::decode::{decode_color, decode_depth, RgbImage};
 use crate::error::SequenceError;
+use crate::recording_info::RecordingInfo;
 use crate::source::{is_inside_name, Source};
 
 /// Most frames accepted in one sequence.
@@ -221,6 +222,14 @@ impl DecodedFrame {
     }
 }
 
+/// Frames read from something other than image files: a camera recording.
+pub trait FrameReader {
+    /// Decodes frame `index`.
+    fn frame(&mut self, index: usize) -> Result<DecodedFrame, SequenceError>;
+    /// What the recording holds, for `upetrack info` and the page.
+    fn info(&self) -> RecordingInfo;
+}
+
 /// An opened sequence: metadata read and checked, frames decoded on demand.
 pub struct Sequence<S: Source> {
     source: S,
@@ -242,8 +251,8 @@ pub struct Sequence<S: Source> {
     pub color_files: Vec<String>,
     /// Relative paths of depth frames, name-sorted.
     pub depth_files: Vec<String>,
-    /// The recording the frames come from, when the sequence is a recording.
-    recording: Option<RefCell<crate::recorded::OpenRecording>>,
+    /// Where the frames come from when they are not image files (a recording).
+    reader: Option<RefCell<Box<dyn FrameReader>>>,
 }
 
 fn read_json<T: serde::de::DeserializeOwned, S: Source>(
@@ -419,31 +428,26 @@ impl<S: Source> Sequence<S> {
         )
     }
 
-    /// The sequence of a camera recording, with `source` giving its `dlo.json`
-    /// (and the ground truth that names) in place of a folder's.
-    pub(crate) fn from_recording(
+    /// A sequence whose frames come from `reader` (`len` of them, named
+    /// `names`), with `source` giving its `dlo.json` (and the ground truth it
+    /// names) in place of a folder's. The reader's depth units and frame
+    /// rate stand unless `dlo.json` sets them.
+    pub(crate) fn with_reader(
         source: S,
-        recording: crate::recorded::OpenRecording,
+        camera: CameraIntrinsics,
+        (units_per_metre, fps): (f64, f64),
+        names: Vec<String>,
+        reader: Box<dyn FrameReader>,
     ) -> Result<Self, SequenceError> {
         let config = read_config(&source)?;
-        let camera = recording.camera()?;
-        // The recording's own depth units and frame rate stand unless dlo.json sets them.
-        let (depth_scale, fps) = rates(
-            &source,
-            &config,
-            Some(1.0 / recording.depth_units()),
-            Some(recording.fps()),
-        )?;
-        let names: Vec<String> = (0..recording.len())
-            .map(|i| recording.frame_name(i))
-            .collect();
+        let rates = rates(&source, &config, Some(units_per_metre), Some(fps))?;
         Self::assemble(
             source,
             camera,
-            (depth_scale, fps),
+            rates,
             config,
             (names.clone(), names),
-            Some(RefCell::new(recording)),
+            Some(RefCell::new(reader)),
         )
     }
 
@@ -453,7 +457,7 @@ impl<S: Source> Sequence<S> {
         (depth_scale, fps): (f64, f64),
         config: DloConfig,
         (color_files, depth_files): (Vec<String>, Vec<String>),
-        recording: Option<RefCell<crate::recorded::OpenRecording>>,
+        reader: Option<RefCell<Box<dyn FrameReader>>>,
     ) -> Result<Self, SequenceError> {
         let hsv = config.check(&source.display("dlo.json"))?;
         let gt_name = config
@@ -510,7 +514,7 @@ impl<S: Source> Sequence<S> {
             groundtruth_occluded,
             color_files,
             depth_files,
-            recording,
+            reader,
         })
     }
 
@@ -544,8 +548,8 @@ impl<S: Source> Sequence<S> {
 
     /// Reads and decodes frame `index`, checking both images against the intrinsics.
     pub fn frame(&self, index: usize) -> Result<DecodedFrame, SequenceError> {
-        if let Some(rec) = &self.recording {
-            return rec.borrow_mut().frame(index);
+        if let Some(reader) = &self.reader {
+            return reader.borrow_mut().frame(index);
         }
         let (Some(cpath), Some(dpath)) = (self.color_files.get(index), self.depth_files.get(index))
         else {
@@ -579,8 +583,8 @@ impl<S: Source> Sequence<S> {
     }
 
     /// The recording the frames come from, if any: its streams and what was paired.
-    pub fn recording_info(&self) -> Option<crate::recorded::RecordingInfo> {
-        self.recording.as_ref().map(|r| r.borrow().info())
+    pub fn recording_info(&self) -> Option<RecordingInfo> {
+        self.reader.as_ref().map(|r| r.borrow().info())
     }
 
     /// The underlying source.

@@ -96,7 +96,7 @@ mod tests {
     #[test]
     fn pairs_nearest_within_half_a_period() {
         let color = [0, 33 * MS, 66 * MS, 100 * MS];
-        let depth = [1 * MS, 34 * MS, 80 * MS + 1, 99 * MS];
+        let depth = [MS, 34 * MS, 80 * MS + 1, 99 * MS];
         let p = pair_by_time(&color, &depth, 16 * MS);
         let got: Vec<(usize, usize)> = p.pairs.iter().map(|p| (p.color, p.depth)).collect();
         // 66 ms has its nearest depth 14 ms + 1 ns away: within; 80 ms depth taken by it.

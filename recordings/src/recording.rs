@@ -322,7 +322,7 @@ impl<R: ByteSource> Recording<R> {
             Layout::Librealsense => {
                 let d = Self::stream_to_reference(&mut bag, &depth_topic)?;
                 let c = Self::stream_to_reference(&mut bag, &color_topic)?;
-                let units = Self::depth_units(&mut bag, &depth_topic)?;
+                let units = Self::read_depth_units(&mut bag, &depth_topic)?;
                 // Each stream's tf is the reference-to-stream transform.
                 (Some(d.inverse().then(&c)), units)
             }
@@ -381,7 +381,7 @@ impl<R: ByteSource> Recording<R> {
     }
 
     /// The depth sensor's `Depth_Units` option, or the default.
-    fn depth_units(bag: &mut Bag<R>, depth_topic: &str) -> Result<f64, RecordingError> {
+    fn read_depth_units(bag: &mut Bag<R>, depth_topic: &str) -> Result<f64, RecordingError> {
         let sensor = depth_topic
             .splitn(4, '/')
             .take(3)
@@ -476,7 +476,7 @@ fn rows<'a>(
     }
     let row = w as usize * bpp;
     let step = im.step as usize;
-    let needed = step.checked_mul(h as usize).unwrap_or(usize::MAX);
+    let needed = step.saturating_mul(h as usize);
     if step < row || im.data.len() < needed {
         return Err(RecordingError::message(
             &stream.topic,
