@@ -2,9 +2,11 @@
 """Writes the recording fixtures of tests/recordings/ with the real writers.
 
     python3 -m venv venv && venv/bin/pip install pyrealsense2==2.55.1.6486 rosbags numpy pillow
+    python3 -m venv venv259 && venv259/bin/pip install pyrealsense2==2.59.1.11053 rosbags numpy pillow
     apt-get install -y libusb-1.0-0            # pyrealsense2's runtime
     cargo build --release -p upetrack-cli
-    venv/bin/python scripts/make_recordings.py  # from the repository root
+    venv/bin/python scripts/make_recordings.py      # from the repository root: the .bag files
+    venv259/bin/python scripts/make_recordings.py   # librealsense 2.59's .db3 and its goldens
 
 From one synthetic scene (`upetrack synth dynamic-pull`, 8 frames, halved to
 320x240 so each file stays small) it writes:
@@ -17,6 +19,12 @@ From one synthetic scene (`upetrack synth dynamic-pull`, 8 frames, halved to
   0.3 degrees, so the depth is not aligned to colour, as a real D435i's;
 - golden/aligned_<n>.png: pyrealsense2's rs2::align (to colour) of each frame
   of librealsense.bag, played back;
+- librealsense.db3 and golden_db3/ (run with pyrealsense2 2.59): the same
+  from librealsense 2.59's recorder, which writes rosbag2 in SQLite with
+  PNG colour and compressedDepth depth;
+- ros2_png.db3 (8 frames, PNG-compressed colour and compressedDepth depth)
+  and ros2_raw.db3 (3 frames, raw images): realsense-ros's ROS 2 layout
+  (/camera/camera/...) written by `rosbags` in rosbag2's SQLite storage;
 - ros_bz2.bag, ros_lz4.bag, ros_none.bag: realsense-ros's layout
   (/camera/color/image_raw bgr8, /camera/aligned_depth_to_color/image_raw
   16UC1 in mm, their camera_info) written by `rosbags`, one per chunk
@@ -165,10 +173,9 @@ def write_librealsense(cam, colors, depths, path=None, compress=True):
     return path
 
 
-def write_goldens(path):
+def write_goldens(path, gold):
     import pyrealsense2 as rs
 
-    gold = OUT / "golden"
     if gold.exists():
         shutil.rmtree(gold)
     gold.mkdir()
@@ -238,19 +245,81 @@ def write_ros(cam, colors, depths, out=None, sizes=None):
                     wr.write(topics[f"{topic}/camera_info"], stamp, ts.serialize_ros1(info, Info.__msgtype__))
 
 
-def write_seeds(cam, colors, depths):
+def write_ros2(cam, colors, depths, out=None, sizes=(FRAMES, 3)):
+    import io
+    from rosbags.rosbag2 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    Img, Info = ts.types["sensor_msgs/msg/Image"], ts.types["sensor_msgs/msg/CameraInfo"]
+    Comp = ts.types["sensor_msgs/msg/CompressedImage"]
+    Header, Time = ts.types["std_msgs/msg/Header"], ts.types["builtin_interfaces/msg/Time"]
+    Roi = ts.types["sensor_msgs/msg/RegionOfInterest"]
+    w, h = cam["width"], cam["height"]
+    k = np.array([cam["fx"], 0, cam["cx"], 0, cam["fy"], cam["cy"], 0, 0, 1], dtype=np.float64)
+    p = np.array([cam["fx"], 0, cam["cx"], 0, 0, cam["fy"], cam["cy"], 0, 0, 0, 1, 0], dtype=np.float64)
+
+    def png(array):
+        b = io.BytesIO()
+        Image.fromarray(array).save(b, format="PNG")
+        return np.frombuffer(b.getvalue(), dtype=np.uint8)
+
+    base = "/camera/camera"
+    for name, compressed, frames in [("png", True, sizes[0]), ("raw", False, sizes[1])]:
+        with tempfile.TemporaryDirectory() as tmp:
+            folder = Path(tmp) / "bag"
+            topics = {}
+            with Writer(folder, version=8) as wr:
+                for stream in ["color", "aligned_depth_to_color"]:
+                    image = f"{base}/{stream}/image_raw"
+                    if compressed:
+                        image += "/compressed" if stream == "color" else "/compressedDepth"
+                    topics[stream] = (wr.add_connection(image, (Comp if compressed else Img).__msgtype__, typestore=ts),
+                                      wr.add_connection(f"{base}/{stream}/camera_info", Info.__msgtype__, typestore=ts))
+                for i in range(frames):
+                    ns = 1_000_000_000 + i * 1_000_000_000 // FPS
+                    for stream, stamp in [("color", ns), ("aligned_depth_to_color", ns + 2_000_000)]:
+                        hdr = Header(stamp=Time(sec=stamp // 10**9, nanosec=stamp % 10**9),
+                                     frame_id="camera_color_optical_frame")
+                        info = Info(header=hdr, height=h, width=w, distortion_model="plumb_bob",
+                                    d=np.zeros(5), k=k, r=np.eye(3).flatten(), p=p, binning_x=0, binning_y=0,
+                                    roi=Roi(x_offset=0, y_offset=0, height=0, width=0, do_rectify=False))
+                        if stream == "color" and compressed:
+                            msg = Comp(header=hdr, format="rgb8; png compressed bgr8", data=png(colors[i]))
+                        elif compressed:
+                            head = np.zeros(12, dtype=np.uint8)  # compressedDepth's format and parameters
+                            msg = Comp(header=hdr, format="16UC1; compressedDepth png",
+                                       data=np.concatenate([head, png(depths[i])]))
+                        elif stream == "color":
+                            msg = Img(header=hdr, height=h, width=w, encoding="rgb8", is_bigendian=0,
+                                      step=w * 3, data=np.ascontiguousarray(colors[i]).flatten())
+                        else:
+                            msg = Img(header=hdr, height=h, width=w, encoding="16UC1", is_bigendian=0,
+                                      step=w * 2, data=depths[i].astype("<u2").view(np.uint8).flatten())
+                        image_conn, info_conn = topics[stream]
+                        wr.write(image_conn, stamp, ts.serialize_cdr(msg, msg.__msgtype__))
+                        wr.write(info_conn, stamp, ts.serialize_cdr(info, Info.__msgtype__))
+            db3 = next(folder.glob("*.db3"))
+            shutil.copy(db3, (out or OUT) / f"ros2_{name}.db3")
+
+
+def write_seeds(cam, colors, depths, v259):
     seeds = ROOT / "fuzz" / "seeds" / "rosbag"
     seeds.mkdir(parents=True, exist_ok=True)
     small = dict(width=16, height=12, fx=cam["fx"] / 20, fy=cam["fy"] / 20,
                  cx=(cam["cx"] + 0.5) / 20 - 0.5, cy=(cam["cy"] + 0.5) / 20 - 0.5)
     c = [x[::20, ::20].copy() for x in colors[:2]]
     d = [x[::20, ::20].copy() for x in depths[:2]]
-    write_ros(small, c, d, out=seeds, sizes=[2, 2, 2])
     global DEPTH_FX, DEPTH_PPX, DEPTH_PPY
     saved = (DEPTH_FX, DEPTH_PPX, DEPTH_PPY)
     DEPTH_FX, DEPTH_PPX, DEPTH_PPY = 10.0, 8.1, 5.9
-    write_librealsense(small, c, d, path=seeds / "librealsense_lz4.bag", compress=True)
-    write_librealsense(small, c, d, path=seeds / "librealsense_none.bag", compress=False)
+    if v259:
+        write_librealsense(small, c, d, path=seeds / "librealsense.db3")
+    else:
+        write_ros(small, c, d, out=seeds, sizes=[2, 2, 2])
+        write_ros2(small, c, d, out=seeds, sizes=(2, 2))
+        write_librealsense(small, c, d, path=seeds / "librealsense_lz4.bag", compress=True)
+        write_librealsense(small, c, d, path=seeds / "librealsense_none.bag", compress=False)
     DEPTH_FX, DEPTH_PPX, DEPTH_PPY = saved
 
 
@@ -260,10 +329,19 @@ def main():
         tmp = Path(tmp)
         cam, colors, depths = synth_scene(tmp / "scene")
         write_reference(tmp / "scene", cam, colors, depths)
-    bag = write_librealsense(cam, colors, depths)
-    write_goldens(bag)
-    write_ros(cam, colors, depths)
-    write_seeds(cam, colors, depths)
+    import pyrealsense2 as rs
+
+    # pyrealsense2 2.59 says its version (and writes .db3); 2.55 does not.
+    v259 = getattr(rs, "__version__", "2.55") >= "2.59"
+    if v259:
+        rec = write_librealsense(cam, colors, depths, path=OUT / "librealsense.db3")
+        write_goldens(rec, OUT / "golden_db3")
+    else:
+        rec = write_librealsense(cam, colors, depths)
+        write_goldens(rec, OUT / "golden")
+        write_ros(cam, colors, depths)
+        write_ros2(cam, colors, depths)
+    write_seeds(cam, colors, depths, v259)
     for f in sorted(OUT.rglob("*")):
         if f.is_file():
             print(f"{f.relative_to(ROOT)}: {f.stat().st_size} bytes")

@@ -77,7 +77,7 @@ pub fn cmd_bench(raw: &[String]) -> Result<(), CliError> {
         }
     } else {
         for path in &args.positional {
-            let seq = open_sequence(path, &crate::RecordingArgs::from(&args))?;
+            let seq = open_sequence(path, &crate::RecordingArgs::from(&args)?)?;
             let mut fr = Vec::new();
             for i in 0..seq.len().min(frames) {
                 let d = seq.frame(i)?;

@@ -26,14 +26,15 @@ USAGE:
   upetrack synth <scenario> <dir> [--frames N] [--seed S] [--hd] [--variant V]
   upetrack bench [<sequence>...] [--frames N] [--repeat R] [--algorithm A,B,..]
   upetrack overlay <sequence> <result.json> <frame> <out.png> [--depth]
-  upetrack info <recording.bag> [--json] [--color-topic T] [--depth-topic T]
-  upetrack export <recording.bag> <dir> [--frames A..B] [--dlo <dlo.json>] [--color-topic T] [--depth-topic T]
+  upetrack info <recording> [--json] [--color-topic T] [--depth-topic T]
+  upetrack export <recording> <dir> [--frames A..B] [--dlo <dlo.json>] [--color-topic T] [--depth-topic T]
   upetrack scenarios
 
 A sequence is a folder in the layout of docs/sequence-format.md, a .zip of one, or a
-camera recording (ROS1 .bag from the RealSense Viewer, rs-record or realsense-ros);
+camera recording (ROS1 .bag or rosbag2 .db3 from the RealSense Viewer, rs-record or realsense-ros);
 a recording takes its configuration from --dlo <dlo.json> (colour range, occluders),
-and --color-topic / --depth-topic when the streams are not found by name.
+and --color-topic / --depth-topic when the streams are not found by name;
+--align x86-sse|portable picks librealsense's aligner (default: the recording's era).
 Algorithms: upetrack (default), cpd, trackdlo; --algorithm overrides the parameter file's.
 Scenarios: static-s, dynamic-pull, tip-drag, sweep-10..sweep-50, lifted-swing, fast-pull.";
 
@@ -144,7 +145,7 @@ fn with_algorithm(params: Params, algorithm: Algorithm) -> Params {
 pub type AnySequence = Sequence<Box<dyn upetrack_io::Source>>;
 
 /// Options of every command that reads sequences, for recordings.
-const RECORDING_OPTIONS: [&str; 3] = ["dlo", "color-topic", "depth-topic"];
+const RECORDING_OPTIONS: [&str; 4] = ["dlo", "color-topic", "depth-topic", "align"];
 
 /// `valued` with the recording options added.
 fn with_recording_options<'a>(valued: &[&'a str]) -> Vec<&'a str> {
@@ -159,14 +160,26 @@ struct RecordingArgs {
 }
 
 impl RecordingArgs {
-    fn from(args: &Args) -> Self {
-        Self {
+    fn from(args: &Args) -> Result<Self, CliError> {
+        use upetrack_recordings::align::AlignArithmetic;
+        let align = match args.value("align") {
+            None => None,
+            Some("x86-sse") => Some(AlignArithmetic::X86Sse),
+            Some("portable") => Some(AlignArithmetic::Portable),
+            Some(other) => {
+                return Err(CliError(format!(
+                    "--align: `{other}` is not x86-sse or portable"
+                )))
+            }
+        };
+        Ok(Self {
             dlo: args.value("dlo").map(str::to_string),
             options: upetrack_recordings::RecordingOptions {
                 color_topic: args.value("color-topic").map(str::to_string),
                 depth_topic: args.value("depth-topic").map(str::to_string),
+                align,
             },
-        }
+        })
     }
 }
 
@@ -208,7 +221,7 @@ fn cmd_track(raw: &[String]) -> Result<(), CliError> {
         [one] => with_algorithm(params, *one),
         _ => return Err(CliError("track runs one algorithm".into())),
     };
-    let seq = open_sequence(seq_path, &RecordingArgs::from(&args))?;
+    let seq = open_sequence(seq_path, &RecordingArgs::from(&args)?)?;
     let result = track_sequence(&seq, params, &mut now_ms_since(Instant::now()))?;
     upetrack_io::write::write_json(Path::new(out), &result)?;
     let lost = result.frames.iter().filter(|f| f.lost).count();
@@ -285,7 +298,7 @@ fn cmd_eval(raw: &[String]) -> Result<(), CliError> {
     let several = args.positional.len() > 1 || algorithms.len() > 1;
     let mut rows = Vec::new();
     for path in &args.positional {
-        let seq = open_sequence(path, &RecordingArgs::from(&args))?;
+        let seq = open_sequence(path, &RecordingArgs::from(&args)?)?;
         let name = Path::new(path)
             .file_name()
             .map_or(path.clone(), |n| n.to_string_lossy().into_owned());

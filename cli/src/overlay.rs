@@ -51,7 +51,7 @@ pub fn cmd_overlay(raw: &[String]) -> Result<(), CliError> {
             "overlay takes a sequence, a result, a frame and an output\n\n{USAGE}"
         )));
     };
-    let seq = open_sequence(seq_path, &crate::RecordingArgs::from(&args))?;
+    let seq = open_sequence(seq_path, &crate::RecordingArgs::from(&args)?)?;
     let text = std::fs::read_to_string(result_path)
         .map_err(|e| CliError(format!("{result_path}: {e}")))?;
     let result: TrackResult = serde_json::from_str(&text)

@@ -43,11 +43,11 @@ fn print_info(info: &RecordingInfo) {
 
 /// `upetrack info <recording> [--json]`.
 pub fn cmd_info(raw: &[String]) -> Result<(), CliError> {
-    let args = Args::parse(raw, &["json"], &["color-topic", "depth-topic"])?;
+    let args = Args::parse(raw, &["json"], &["color-topic", "depth-topic", "align"])?;
     let [path] = args.positional.as_slice() else {
         return Err(CliError(format!("info takes one recording\n\n{USAGE}")));
     };
-    let rec = OpenRecording::open(Path::new(path), &RecordingArgs::from(&args).options)?;
+    let rec = OpenRecording::open(Path::new(path), &RecordingArgs::from(&args)?.options)?;
     let info = rec.info();
     if args.flag("json") {
         let text = serde_json::to_string_pretty(&info)
@@ -91,7 +91,7 @@ pub fn cmd_export(raw: &[String]) -> Result<(), CliError> {
         Some(r) => frame_range(r)?,
         None => 0..usize::MAX,
     };
-    let seq = open_sequence(path, &RecordingArgs::from(&args))?;
+    let seq = open_sequence(path, &RecordingArgs::from(&args)?)?;
     let start = Instant::now();
     let mut last_shown = 0;
     let n =

@@ -59,9 +59,15 @@ fn reference() -> Sequence<FolderSource> {
 }
 
 #[test]
-fn librealsense_recording_tracks_as_its_exported_folder_and_near_the_original() {
+fn librealsense_recordings_track_as_their_exported_folders_and_near_the_original() {
+    for name in ["librealsense.bag", "librealsense.db3"] {
+        tracks_as_exported_and_near_the_original(name);
+    }
+}
+
+fn tracks_as_exported_and_near_the_original(name: &str) {
     let rec = open_recording(
-        &fixture("librealsense.bag"),
+        &fixture(name),
         Some(&fixture("reference/dlo.json")),
         &RecordingOptions::default(),
     )
@@ -70,10 +76,10 @@ fn librealsense_recording_tracks_as_its_exported_folder_and_near_the_original() 
     assert_eq!(rec.occlusions_at(2).len(), 1, "dlo.json's occluder applies");
     let from_recording = track(&rec);
 
-    let dir = temp_dir("export");
+    let dir = temp_dir(&format!("export-{name}"));
     let out = run(&[
         "export",
-        fixture("librealsense.bag").to_str().expect("utf-8"),
+        fixture(name).to_str().expect("utf-8"),
         dir.to_str().expect("utf-8"),
         "--dlo",
         fixture("reference/dlo.json").to_str().expect("utf-8"),
@@ -96,22 +102,25 @@ fn librealsense_recording_tracks_as_its_exported_folder_and_near_the_original() 
         mean_error_mm(&from_recording, &truth),
         mean_error_mm(&original, &truth),
     );
-    println!("mean error: recording {rec_mm:.2} mm, original {orig_mm:.2} mm");
+    println!("{name}: mean error: recording {rec_mm:.2} mm, original {orig_mm:.2} mm");
     assert!((rec_mm - orig_mm).abs() <= 1.5, "{rec_mm} vs {orig_mm}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
-fn ros_recording_tracks_exactly_as_the_original() {
-    let rec = open_recording(
-        &fixture("ros_bz2.bag"),
-        Some(&fixture("reference/dlo.json")),
-        &RecordingOptions::default(),
-    )
-    .expect("recording opens");
+fn ros_recordings_track_exactly_as_the_original() {
     let truth = reference();
-    let d = max_node_distance(&track(&rec), &track(&truth));
-    assert!(d == 0.0, "aligned depth read back differs: {d} m");
+    let original = track(&truth);
+    for name in ["ros_bz2.bag", "ros2_png.db3"] {
+        let rec = open_recording(
+            &fixture(name),
+            Some(&fixture("reference/dlo.json")),
+            &RecordingOptions::default(),
+        )
+        .expect("recording opens");
+        let d = max_node_distance(&track(&rec), &original);
+        assert!(d == 0.0, "{name}: frames read back differ: {d} m");
+    }
 }
 
 #[test]

@@ -260,20 +260,32 @@ fn fills_span(depth: &Intrinsics, color: &Intrinsics) -> bool {
     pd[0] < pc[0] || pd[1] < pc[1] || special
 }
 
+/// Which of librealsense's two aligners to reproduce. They differ on about
+/// one pixel in ten (rounding, which corners fill, the image border), so a
+/// recording is aligned the way the librealsense of its format aligns it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AlignArithmetic {
+    /// The SSE aligner that x86 builds of librealsense up to 2.55 run (the
+    /// era of ROS1 `.bag` recordings): both corners only when a depth pixel
+    /// is wider than a colour pixel, `p + 0.5` rounded half to even,
+    /// colour pixels outside the image clipped one by one.
+    X86Sse,
+    /// The portable aligner (librealsense 2.59's wheels, ARM builds): both
+    /// corners always, `p + 0.5` truncated, colour pixels outside the image
+    /// clipped one by one.
+    Portable,
+}
+
 /// Depth (units of `depth_scale` metres, `depth_intr.width x height`, 0 = none)
-/// seen from the colour camera, at the colour camera's size.
-///
-/// This is the arithmetic of librealsense's x86 (SSE) aligner, the one
-/// pyrealsense2's wheels run: the depth ray of each corner as
-/// `(x - ppx) / fx` (undistorted only for inverse Brown-Conrady), the corner's
-/// colour pixel rounded half to even after adding 0.5, colour pixels outside
-/// the image clipped one by one.
+/// seen from the colour camera, at the colour camera's size, with the
+/// arithmetic of one of librealsense's aligners.
 pub fn align_depth_to_color(
     depth: &[u16],
     depth_intr: &Intrinsics,
     color_intr: &Intrinsics,
     depth_to_color: &Extrinsics,
     depth_scale: f32,
+    arithmetic: AlignArithmetic,
 ) -> Result<Vec<u16>, RecordingError> {
     let (dw, dh) = (depth_intr.width as usize, depth_intr.height as usize);
     if depth.len() != dw * dh {
@@ -283,8 +295,10 @@ pub fn align_depth_to_color(
         ));
     }
     let (cw, ch) = (color_intr.width as i64, color_intr.height as i64);
-    let span = fills_span(depth_intr, color_intr);
-    let ray = |px: f32, py: f32| {
+    let sse = arithmetic == AlignArithmetic::X86Sse;
+    let span = !sse || fills_span(depth_intr, color_intr);
+    // The SSE aligner's ray: `(x - ppx) / fx`, undistorted for inverse Brown-Conrady only.
+    let sse_ray = |px: f32, py: f32| {
         let mut x = (px - depth_intr.ppx) / depth_intr.fx;
         let mut y = (py - depth_intr.ppy) / depth_intr.fy;
         if depth_intr.model == Distortion::InverseBrownConrady {
@@ -300,9 +314,17 @@ pub fn align_depth_to_color(
     };
     let r = &depth_to_color.rotation;
     let t = &depth_to_color.translation;
-    let corner = |x: f32, y: f32, d: f32| {
+    // The colour pixel of depth pixel corner (px, py) at depth d metres.
+    let corner = |px: f32, py: f32, d: f32| -> (i64, i64) {
+        if !sse {
+            let p = depth_intr.deproject([px, py], d);
+            let q = color_intr.project(depth_to_color.apply(p));
+            // Truncation, as a C cast of `p + 0.5`.
+            return ((q[0] + 0.5) as i64, (q[1] + 0.5) as i64);
+        }
+        let (x, y) = sse_ray(px, py);
         let (px, py) = (d * x, d * y);
-        // Summed in the aligner's order: r0 x + (r3 y + (r6 z + t)).
+        // Summed in the SSE aligner's order: r0 x + (r3 y + (r6 z + t)).
         let qx = r[0] * px + (r[3] * py + (r[6] * d + t[0]));
         let qy = r[1] * px + (r[4] * py + (r[7] * d + t[1]));
         let qz = r[2] * px + (r[5] * py + (r[8] * d + t[2]));
@@ -320,11 +342,9 @@ pub fn align_depth_to_color(
                 continue;
             }
             let d = f32::from(z) * depth_scale;
-            let (tx, ty) = ray(dx as f32 - 0.5, dy as f32 - 0.5);
-            let (x0, y0) = corner(tx, ty, d);
+            let (x0, y0) = corner(dx as f32 - 0.5, dy as f32 - 0.5, d);
             let (x1, y1) = if span {
-                let (bx, by) = ray(dx as f32 + 0.5, dy as f32 + 0.5);
-                corner(bx, by, d)
+                corner(dx as f32 + 0.5, dy as f32 + 0.5, d)
             } else {
                 (x0, y0)
             };
@@ -364,8 +384,15 @@ mod tests {
         let d = intr(3, 3, 10.0, 1.0, 1.0);
         let c = intr(3, 3, 10.0, 1.25, 1.25);
         let depth = [900, 800, 0, 700, 0, 0, 0, 0, 0];
-        let out =
-            align_depth_to_color(&depth, &d, &c, &Extrinsics::IDENTITY, 0.001).expect("aligns");
+        let out = align_depth_to_color(
+            &depth,
+            &d,
+            &c,
+            &Extrinsics::IDENTITY,
+            0.001,
+            AlignArithmetic::X86Sse,
+        )
+        .expect("aligns");
         assert_eq!(out, vec![900, 800, 800, 700, 700, 800, 700, 700, 0]);
     }
 
@@ -379,7 +406,8 @@ mod tests {
             translation: [-0.015, 0.0, 0.0],
             ..Extrinsics::IDENTITY
         };
-        let out = align_depth_to_color(&depth, &i, &i, &shift, 0.001).expect("aligns");
+        let out = align_depth_to_color(&depth, &i, &i, &shift, 0.001, AlignArithmetic::X86Sse)
+            .expect("aligns");
         // Same pixel size on both cameras: only the top-left corner is filled.
         assert!(!fills_span(&i, &i));
         let filled: Vec<usize> = (0..60).filter(|&k| out[k] != 0).collect();
@@ -396,8 +424,40 @@ mod tests {
             translation: [0.5, 0.0, 0.0],
             ..Extrinsics::IDENTITY
         };
-        let out = align_depth_to_color(&depth, &i, &i, &shift, 0.001).expect("aligns");
+        let out = align_depth_to_color(&depth, &i, &i, &shift, 0.001, AlignArithmetic::X86Sse)
+            .expect("aligns");
         assert_eq!(out, vec![0; 12]);
+    }
+
+    #[test]
+    fn portable_aligner_spans_both_corners_on_one_camera_and_truncates() {
+        // On one camera the x86 aligner fills the top-left corner's pixel
+        // only; the portable one fills x..=x+1 (corners at x + 0.25 and
+        // x + 1.25, truncated), clipped at the image border, nearest wins.
+        let d = intr(3, 2, 10.0, 1.0, 1.0);
+        let c = intr(3, 2, 10.0, 1.25, 1.25);
+        let depth = [100, 200, 300, 400, 500, 600];
+        let portable = align_depth_to_color(
+            &depth,
+            &d,
+            &c,
+            &Extrinsics::IDENTITY,
+            0.001,
+            AlignArithmetic::Portable,
+        )
+        .expect("aligns");
+        assert_eq!(portable, vec![100, 100, 200, 100, 100, 200]);
+        let x86 = align_depth_to_color(
+            &depth,
+            &d,
+            &d,
+            &Extrinsics::IDENTITY,
+            0.001,
+            AlignArithmetic::X86Sse,
+        )
+        .expect("aligns");
+        assert!(!fills_span(&d, &d));
+        assert_eq!(x86.iter().filter(|&&v| v != 0).count(), 6, "{x86:?}");
     }
 
     #[test]

@@ -1,11 +1,12 @@
-//! The ROS1 messages a camera recording carries, decoded from their
-//! serialised form (little-endian, `u32`-prefixed strings and arrays).
-//! Trailing bytes after the known fields are ignored: librealsense's writer
-//! leaves some after `sensor_msgs/Image`.
+//! The ROS messages a camera recording carries, decoded from their
+//! serialised form: ROS1's (little-endian, `u32`-prefixed strings and
+//! arrays, no padding) or ROS 2's CDR (a 4-byte encapsulation header, each
+//! primitive aligned to its size, strings counted with their NUL, no `seq`
+//! in the header). Trailing bytes after the known fields are ignored:
+//! librealsense's writer leaves some after `sensor_msgs/Image`.
 
 use crate::bytes::Cursor;
 use crate::error::RecordingError;
-use crate::rosbag1::ros_time_ns;
 
 /// Most distortion coefficients read from a `CameraInfo`.
 pub const MAX_DISTORTION_COEFFS: usize = 16;
@@ -73,11 +74,96 @@ pub struct Transform {
     pub rotation: [f64; 4],
 }
 
-fn header(c: &mut Cursor<'_>) -> Result<Header, RecordingError> {
-    let _seq = c.u32("header seq")?;
-    let stamp_ns = ros_time_ns(c, "header stamp")?;
-    let frame_id = c.string("header frame_id")?;
-    Ok(Header { stamp_ns, frame_id })
+/// How a message is serialised.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Wire {
+    /// ROS1.
+    Ros1,
+    /// ROS 2's CDR, little-endian.
+    Cdr,
+}
+
+/// Reads fields in order, aligning them as the wire format does.
+struct Reader<'a> {
+    c: Cursor<'a>,
+    wire: Wire,
+}
+
+impl<'a> Reader<'a> {
+    fn new(data: &'a [u8], wire: Wire) -> Result<Self, RecordingError> {
+        let mut c = Cursor::new(data, 0);
+        if wire == Wire::Cdr {
+            let head = c.take(4, "CDR encapsulation header")?;
+            if head[..2] != [0, 1] {
+                return Err(RecordingError::corrupt(
+                    0,
+                    format!(
+                        "CDR representation {:02x}{:02x} (only little-endian CDR, 0001, is read)",
+                        head[0], head[1]
+                    ),
+                ));
+            }
+            // Alignment counts from after the header.
+            c = Cursor::new(&data[4..], 4);
+        }
+        Ok(Self { c, wire })
+    }
+
+    fn align(&mut self, n: usize) -> Result<(), RecordingError> {
+        if self.wire == Wire::Cdr {
+            let pos = (self.c.offset() - 4) as usize;
+            let pad = (n - pos % n) % n;
+            self.c.take(pad, "padding")?;
+        }
+        Ok(())
+    }
+
+    fn u8(&mut self, what: &str) -> Result<u8, RecordingError> {
+        self.c.u8(what)
+    }
+
+    fn u32(&mut self, what: &str) -> Result<u32, RecordingError> {
+        self.align(4)?;
+        self.c.u32(what)
+    }
+
+    fn f32(&mut self, what: &str) -> Result<f32, RecordingError> {
+        self.align(4)?;
+        self.c.f32(what)
+    }
+
+    fn f64(&mut self, what: &str) -> Result<f64, RecordingError> {
+        self.align(8)?;
+        self.c.f64(what)
+    }
+
+    fn bytes(&mut self, what: &str) -> Result<&'a [u8], RecordingError> {
+        self.align(4)?;
+        self.c.bytes(what)
+    }
+
+    fn string(&mut self, what: &str) -> Result<String, RecordingError> {
+        let offset = self.c.offset();
+        let mut b = self.bytes(what)?;
+        if self.wire == Wire::Cdr {
+            b = b.strip_suffix(&[0]).unwrap_or(b);
+        }
+        String::from_utf8(b.to_vec())
+            .map_err(|_| RecordingError::corrupt(offset, format!("{what}: not UTF-8")))
+    }
+
+    fn header(&mut self) -> Result<Header, RecordingError> {
+        if self.wire == Wire::Ros1 {
+            let _seq = self.u32("header seq")?;
+        }
+        let sec = u64::from(self.u32("header stamp")?);
+        let nsec = u64::from(self.u32("header stamp")?);
+        let frame_id = self.string("header frame_id")?;
+        Ok(Header {
+            stamp_ns: sec * 1_000_000_000 + nsec,
+            frame_id,
+        })
+    }
 }
 
 fn wrap<T>(topic: &str, r: Result<T, RecordingError>) -> Result<T, RecordingError> {
@@ -85,13 +171,13 @@ fn wrap<T>(topic: &str, r: Result<T, RecordingError>) -> Result<T, RecordingErro
 }
 
 /// Decodes a `sensor_msgs/Image`.
-pub fn image<'a>(data: &'a [u8], topic: &str) -> Result<Image<'a>, RecordingError> {
-    let mut c = Cursor::new(data, 0);
+pub fn image<'a>(data: &'a [u8], wire: Wire, topic: &str) -> Result<Image<'a>, RecordingError> {
     wrap(
         topic,
         (|| {
+            let mut c = Reader::new(data, wire)?;
             Ok(Image {
-                header: header(&mut c)?,
+                header: c.header()?,
                 height: c.u32("height")?,
                 width: c.u32("width")?,
                 encoding: c.string("encoding")?,
@@ -106,14 +192,15 @@ pub fn image<'a>(data: &'a [u8], topic: &str) -> Result<Image<'a>, RecordingErro
 /// Decodes a `sensor_msgs/CompressedImage`.
 pub fn compressed_image<'a>(
     data: &'a [u8],
+    wire: Wire,
     topic: &str,
 ) -> Result<CompressedImage<'a>, RecordingError> {
-    let mut c = Cursor::new(data, 0);
     wrap(
         topic,
         (|| {
+            let mut c = Reader::new(data, wire)?;
             Ok(CompressedImage {
-                header: header(&mut c)?,
+                header: c.header()?,
                 format: c.string("format")?,
                 data: c.bytes("data")?,
             })
@@ -121,13 +208,13 @@ pub fn compressed_image<'a>(
     )
 }
 
-/// Decodes a `sensor_msgs/CameraInfo` (ROS1 field names `D`, `K`).
-pub fn camera_info(data: &[u8], topic: &str) -> Result<CameraInfo, RecordingError> {
-    let mut c = Cursor::new(data, 0);
+/// Decodes a `sensor_msgs/CameraInfo` (`D` / `d`, then `K` / `k`).
+pub fn camera_info(data: &[u8], wire: Wire, topic: &str) -> Result<CameraInfo, RecordingError> {
     wrap(
         topic,
         (|| {
-            header(&mut c)?;
+            let mut c = Reader::new(data, wire)?;
+            c.header()?;
             let height = c.u32("height")?;
             let width = c.u32("width")?;
             let distortion_model = c.string("distortion_model")?;
@@ -156,36 +243,98 @@ pub fn camera_info(data: &[u8], topic: &str) -> Result<CameraInfo, RecordingErro
 }
 
 /// Decodes a `geometry_msgs/Transform`.
-pub fn transform(data: &[u8], topic: &str) -> Result<Transform, RecordingError> {
-    let mut c = Cursor::new(data, 0);
+pub fn transform(data: &[u8], wire: Wire, topic: &str) -> Result<Transform, RecordingError> {
+    wrap(
+        topic,
+        Reader::new(data, wire).and_then(|mut c| transform_fields(&mut c)),
+    )
+}
+
+fn transform_fields(c: &mut Reader<'_>) -> Result<Transform, RecordingError> {
+    let mut translation = [0.0; 3];
+    for v in &mut translation {
+        *v = c.f64("translation")?;
+    }
+    let mut rotation = [0.0; 4];
+    for v in &mut rotation {
+        *v = c.f64("rotation")?;
+    }
+    Ok(Transform {
+        translation,
+        rotation,
+    })
+}
+
+/// One `geometry_msgs/TransformStamped` of a `tf2_msgs/TFMessage`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StampedTransform {
+    /// The parent frame.
+    pub frame_id: String,
+    /// The child frame.
+    pub child_frame_id: String,
+    /// The transform from child to parent coordinates.
+    pub transform: Transform,
+}
+
+/// Decodes a `tf2_msgs/TFMessage` (`/tf_static`).
+pub fn tf_message(
+    data: &[u8],
+    wire: Wire,
+    topic: &str,
+) -> Result<Vec<StampedTransform>, RecordingError> {
     wrap(
         topic,
         (|| {
-            let mut t = [0.0; 3];
-            for v in &mut t {
-                *v = c.f64("translation")?;
+            let mut c = Reader::new(data, wire)?;
+            let n = c.u32("transforms length")? as usize;
+            // Each transform takes at least 60 bytes: a count past that is corrupt.
+            if n > data.len() / 60 {
+                return Err(RecordingError::corrupt(
+                    0,
+                    format!("{n} transforms in {} bytes", data.len()),
+                ));
             }
-            let mut q = [0.0; 4];
-            for v in &mut q {
-                *v = c.f64("rotation")?;
+            let mut out = Vec::with_capacity(n);
+            for _ in 0..n {
+                let header = c.header()?;
+                let child_frame_id = c.string("child_frame_id")?;
+                let transform = transform_fields(&mut c)?;
+                out.push(StampedTransform {
+                    frame_id: header.frame_id,
+                    child_frame_id,
+                    transform,
+                });
             }
-            Ok(Transform {
-                translation: t,
-                rotation: q,
-            })
+            Ok(out)
         })(),
     )
 }
 
+/// Decodes a `std_msgs/String`.
+pub fn string(data: &[u8], wire: Wire, topic: &str) -> Result<String, RecordingError> {
+    wrap(
+        topic,
+        Reader::new(data, wire).and_then(|mut c| c.string("data")),
+    )
+}
+
 /// Decodes a `std_msgs/Float32`.
-pub fn float32(data: &[u8], topic: &str) -> Result<f32, RecordingError> {
-    wrap(topic, Cursor::new(data, 0).f32("value"))
+pub fn float32(data: &[u8], wire: Wire, topic: &str) -> Result<f32, RecordingError> {
+    wrap(
+        topic,
+        Reader::new(data, wire).and_then(|mut c| c.f32("value")),
+    )
 }
 
 /// Decodes librealsense's `realsense_msgs/StreamInfo`: the nominal frame rate and the encoding.
 pub fn stream_info(data: &[u8], topic: &str) -> Result<(u32, String), RecordingError> {
-    let mut c = Cursor::new(data, 0);
-    wrap(topic, (|| Ok((c.u32("fps")?, c.string("encoding")?)))())
+    wrap(
+        topic,
+        (|| {
+            let mut c = Reader::new(data, Wire::Ros1)?;
+            Ok((c.u32("fps")?, c.string("encoding")?))
+        })(),
+    )
 }
 
 #[cfg(test)]
@@ -215,7 +364,7 @@ pub(crate) mod tests {
     fn image_fields_in_order_and_trailing_bytes_ignored() {
         let mut b = image_bytes(2, 1, "mono16", 4, &[1, 0, 2, 0]);
         b.extend([0, 0, 0, 0]);
-        let im = image(&b, "/d").expect("image");
+        let im = image(&b, Wire::Ros1, "/d").expect("image");
         assert_eq!((im.width, im.height, im.step), (2, 1, 4));
         assert_eq!(im.encoding, "mono16");
         assert_eq!(im.header.stamp_ns, 1_000_000_500);
@@ -225,8 +374,35 @@ pub(crate) mod tests {
     #[test]
     fn truncated_image_names_its_topic() {
         let b = image_bytes(2, 1, "mono16", 4, &[1, 0, 2, 0]);
-        let e = image(&b[..b.len() - 1], "/camera/depth").expect_err("truncated");
+        let e = image(&b[..b.len() - 1], Wire::Ros1, "/camera/depth").expect_err("truncated");
         assert!(e.to_string().contains("/camera/depth"), "{e}");
+    }
+
+    #[test]
+    fn cdr_aligns_each_field_and_drops_the_strings_nul() {
+        // std_msgs/Header then a u8, a padded u32 and a padded f64.
+        let mut b = vec![0u8, 1, 0, 0];
+        b.extend(3u32.to_le_bytes()); // sec
+        b.extend(7u32.to_le_bytes()); // nanosec
+        b.extend(3u32.to_le_bytes());
+        b.extend(b"ab\0");
+        b.push(9); // u8 at 15
+        b.extend([0xee; 0]); // already at 16: no pad for the u32
+        b.extend(5u32.to_le_bytes()); // at 16..20
+        b.extend([0xee; 4]); // pad to 24 for the f64
+        b.extend(2.5f64.to_le_bytes());
+        let mut r = Reader::new(&b, Wire::Cdr).expect("header");
+        let h = r.header().expect("header");
+        assert_eq!((h.stamp_ns, h.frame_id.as_str()), (3_000_000_007, "ab"));
+        assert_eq!(r.u8("x").ok(), Some(9));
+        assert_eq!(r.u32("y").ok(), Some(5));
+        assert_eq!(r.f64("z").ok(), Some(2.5));
+        let mut be = b.clone();
+        be[1] = 0;
+        assert!(
+            Reader::new(&be, Wire::Cdr).is_err(),
+            "big-endian CDR refused"
+        );
     }
 
     #[test]
@@ -238,6 +414,6 @@ pub(crate) mod tests {
         b.extend(64u32.to_le_bytes());
         b.extend(0u32.to_le_bytes());
         b.extend(1_000_000u32.to_le_bytes());
-        assert!(camera_info(&b, "/info").is_err());
+        assert!(camera_info(&b, Wire::Ros1, "/info").is_err());
     }
 }

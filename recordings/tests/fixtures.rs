@@ -1,8 +1,10 @@
 //! The reader on recordings made by the real writers (`scripts/make_recordings.py`):
-//! librealsense 2.55's recorder and `rosbags` in realsense-ros's layout.
+//! librealsense 2.55's recorder (ROS1 bag), librealsense 2.59's (rosbag2
+//! `.db3`), and `rosbags` in realsense-ros's ROS1 and ROS 2 layouts.
 
 use std::path::{Path, PathBuf};
 
+use upetrack_recordings::align::AlignArithmetic;
 use upetrack_recordings::recording::Layout;
 use upetrack_recordings::{FileBytes, Recording, RecordingError, RecordingOptions};
 
@@ -36,13 +38,34 @@ fn png(path: &Path) -> (u32, u32, Vec<u16>) {
 }
 
 #[test]
-fn librealsense_bag_streams_intrinsics_and_units() {
-    let rec = open("librealsense.bag");
+fn librealsense_recordings_streams_intrinsics_and_units() {
+    for (name, suffix) in [
+        ("librealsense.bag", ""),
+        ("librealsense.db3", "/compressed"),
+    ] {
+        let rec = open(name);
+        let depth_suffix = if suffix.is_empty() {
+            ""
+        } else {
+            "/compressedDepth"
+        };
+        assert_eq!(
+            rec.color.topic,
+            format!("/device_0/sensor_1/Color_0/image/data{suffix}")
+        );
+        assert_eq!(
+            rec.depth.topic,
+            format!("/device_0/sensor_0/Depth_0/image/data{depth_suffix}")
+        );
+        check_librealsense(&rec, name);
+    }
+}
+
+fn check_librealsense(rec: &Recording<FileBytes>, name: &str) {
+    println!("{name}");
     assert_eq!(rec.layout, Layout::Librealsense);
     assert_eq!(rec.len(), 8);
     assert_eq!((rec.unpaired_color, rec.unpaired_depth), (0, 0));
-    assert_eq!(rec.color.topic, "/device_0/sensor_1/Color_0/image/data");
-    assert_eq!(rec.depth.topic, "/device_0/sensor_0/Depth_0/image/data");
     let d = rec.depth.intrinsics;
     assert_eq!((d.width, d.height, d.fx, d.ppx), (320, 240, 192.0, 161.3));
     let c = rec.color.intrinsics;
@@ -61,12 +84,27 @@ fn librealsense_bag_streams_intrinsics_and_units() {
 
 #[test]
 fn alignment_matches_pyrealsense2_align_on_99_percent_of_pixels() {
-    let mut rec = open("librealsense.bag");
+    for (name, golden) in [
+        ("librealsense.bag", "golden"),
+        ("librealsense.db3", "golden_db3"),
+    ] {
+        aligned_like_pyrealsense2(name, golden);
+    }
+}
+
+/// Share of valid pixels within 1 unit of pyrealsense2's golden, aligned with `align`.
+fn agreement(name: &str, golden_dir: &str, align: Option<AlignArithmetic>) -> f64 {
+    let bytes = FileBytes::open(&fixture(name)).expect("fixture exists");
+    let options = RecordingOptions {
+        align,
+        ..RecordingOptions::default()
+    };
+    let mut rec = Recording::open(bytes, &options).expect("opens");
     let mut total = 0usize;
     let mut within = 0usize;
     for i in 0..rec.len() {
         let f = rec.frame(i).expect("frame decodes");
-        let (w, h, golden) = png(&fixture(&format!("golden/aligned_{i:06}.png")));
+        let (w, h, golden) = png(&fixture(&format!("{golden_dir}/aligned_{i:06}.png")));
         assert_eq!((w, h), (f.width, f.height));
         for (&ours, &theirs) in f.depth.iter().zip(&golden) {
             if ours == 0 && theirs == 0 {
@@ -78,18 +116,42 @@ fn alignment_matches_pyrealsense2_align_on_99_percent_of_pixels() {
             }
         }
     }
-    let share = within as f64 / total as f64;
-    println!("aligned pixels within 1 unit of pyrealsense2: {within}/{total} = {share:.5}");
     assert!(
         total > 8 * 320 * 200,
         "{total} valid pixels: too few to judge"
     );
+    let share = within as f64 / total as f64;
+    println!("{name} ({align:?}): aligned pixels within 1 unit of pyrealsense2: {within}/{total} = {share:.5}");
+    share
+}
+
+fn aligned_like_pyrealsense2(name: &str, golden_dir: &str) {
+    let share = agreement(name, golden_dir, None);
     assert!(share >= 0.99, "{share}");
+    // The other aligner's arithmetic would not do: the check tells them apart.
+    let own = Recording::open(
+        FileBytes::open(&fixture(name)).expect("fixture"),
+        &RecordingOptions::default(),
+    )
+    .expect("opens")
+    .align;
+    let other = match own {
+        AlignArithmetic::X86Sse => AlignArithmetic::Portable,
+        AlignArithmetic::Portable => AlignArithmetic::X86Sse,
+    };
+    let wrong = agreement(name, golden_dir, Some(other));
+    assert!(wrong < 0.99, "{name}: {other:?} also agrees on {wrong}");
 }
 
 #[test]
 fn ros_bags_give_back_the_frames_that_were_written() {
-    for (name, frames) in [("ros_bz2.bag", 8), ("ros_lz4.bag", 4), ("ros_none.bag", 3)] {
+    for (name, frames) in [
+        ("ros_bz2.bag", 8),
+        ("ros_lz4.bag", 4),
+        ("ros_none.bag", 3),
+        ("ros2_png.db3", 8),
+        ("ros2_raw.db3", 3),
+    ] {
         let mut rec = open(name);
         assert_eq!(rec.layout, Layout::Ros, "{name}");
         assert_eq!(rec.len(), frames, "{name}");
@@ -150,7 +212,7 @@ fn named_topic_that_is_missing_lists_the_topics_there_are() {
     let bytes = FileBytes::open(&fixture("ros_none.bag")).expect("fixture");
     let options = RecordingOptions {
         color_topic: Some("/camera/rgb".into()),
-        depth_topic: None,
+        ..RecordingOptions::default()
     };
     let e = Recording::open(bytes, &options).err().expect("refused");
     let text = e.to_string();

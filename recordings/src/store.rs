@@ -1,0 +1,178 @@
+//! The container under a recording, whichever it is: a ROS1 bag or a rosbag2
+//! SQLite database, seen as one list of topics and one time-ordered list of
+//! messages, each read on demand.
+
+use crate::bytes::ByteSource;
+use crate::error::RecordingError;
+use crate::ros_msgs::Wire;
+use crate::rosbag1::{self, Bag};
+use crate::rosbag2::{self, Rosbag2};
+use crate::sqlite;
+
+/// A topic with its message type as `package/Type` (ROS 2's `/msg/` dropped).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Topic {
+    /// Topic name.
+    pub name: String,
+    /// Message type, as `sensor_msgs/Image`.
+    pub msg_type: String,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum At {
+    Bag(rosbag1::MessageRef),
+    Db(rosbag2::Message),
+}
+
+/// One message: its topic (an index into [`Store::topics`]), its time and its place.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Msg {
+    /// Index of its topic.
+    pub topic: usize,
+    /// Recording time, nanoseconds.
+    pub time_ns: u64,
+    at: At,
+}
+
+enum Inner<R: ByteSource> {
+    Bag(Bag<R>),
+    Db(Rosbag2<R>),
+}
+
+/// An opened container.
+pub struct Store<R: ByteSource> {
+    inner: Inner<R>,
+    /// Every topic, once.
+    pub topics: Vec<Topic>,
+    /// Every message, in time order.
+    pub messages: Vec<Msg>,
+    /// How its messages are serialised.
+    pub wire: Wire,
+}
+
+/// `true` when `head` starts like a container this crate reads.
+pub fn is_container(head: &[u8]) -> bool {
+    rosbag1::is_bag(head) || sqlite::is_sqlite(head)
+}
+
+fn topic_index(topics: &mut Vec<Topic>, name: &str, msg_type: &str) -> usize {
+    let msg_type = msg_type.replacen("/msg/", "/", 1);
+    if let Some(i) = topics.iter().position(|t| t.name == name) {
+        return i;
+    }
+    topics.push(Topic {
+        name: name.to_string(),
+        msg_type,
+    });
+    topics.len() - 1
+}
+
+impl<R: ByteSource> Store<R> {
+    /// Opens a ROS1 bag or a rosbag2 `.db3`, told apart by their first bytes.
+    pub fn open(mut src: R) -> Result<Self, RecordingError> {
+        let mut head = [0u8; 16];
+        let n = head.len().min(src.len() as usize);
+        src.read_at(0, &mut head[..n])?;
+        let mut topics = Vec::new();
+        if sqlite::is_sqlite(&head[..n]) {
+            let db = Rosbag2::open(src)?;
+            if let Some(t) = db.topics.iter().find(|t| t.serialization != "cdr") {
+                return Err(RecordingError::UnknownFormat {
+                    reason: format!(
+                        "topic {} is serialised as `{}` (only cdr is read)",
+                        t.name, t.serialization
+                    ),
+                });
+            }
+            let ids: Vec<(i64, usize)> = db
+                .topics
+                .iter()
+                .map(|t| (t.id, topic_index(&mut topics, &t.name, &t.msg_type)))
+                .collect();
+            let messages = db
+                .messages
+                .iter()
+                .filter_map(|m| {
+                    let topic = ids.iter().find(|(id, _)| *id == m.topic)?.1;
+                    Some(Msg {
+                        topic,
+                        time_ns: m.time_ns,
+                        at: At::Db(*m),
+                    })
+                })
+                .collect();
+            return Ok(Self {
+                inner: Inner::Db(db),
+                topics,
+                messages,
+                wire: Wire::Cdr,
+            });
+        }
+        let bag = Bag::open(src)?;
+        let ids: Vec<(u32, usize)> = bag
+            .connections
+            .values()
+            .map(|c| (c.id, topic_index(&mut topics, &c.topic, &c.msg_type)))
+            .collect();
+        let messages = bag
+            .messages
+            .iter()
+            .filter_map(|m| {
+                let topic = ids.iter().find(|(id, _)| *id == m.conn)?.1;
+                Some(Msg {
+                    topic,
+                    time_ns: m.time_ns,
+                    at: At::Bag(*m),
+                })
+            })
+            .collect();
+        Ok(Self {
+            inner: Inner::Bag(bag),
+            topics,
+            messages,
+            wire: Wire::Ros1,
+        })
+    }
+
+    /// What the container reader could not read.
+    pub fn warnings(&self) -> &[String] {
+        match &self.inner {
+            Inner::Bag(b) => &b.warnings,
+            Inner::Db(_) => &[],
+        }
+    }
+
+    /// The serialised message `m`.
+    pub fn read(&mut self, m: &Msg) -> Result<Vec<u8>, RecordingError> {
+        match (&mut self.inner, &m.at) {
+            (Inner::Bag(b), At::Bag(r)) => b.read(r),
+            (Inner::Db(d), At::Db(r)) => d.read(r),
+            _ => Err(RecordingError::corrupt(0, "a message of another container")),
+        }
+    }
+
+    /// The topic named `name`, if any.
+    pub fn topic(&self, name: &str) -> Option<&Topic> {
+        self.topics.iter().find(|t| t.name == name)
+    }
+
+    /// The messages on topic `name`, in time order.
+    pub fn on(&self, name: &str) -> Vec<Msg> {
+        let Some(i) = self.topics.iter().position(|t| t.name == name) else {
+            return Vec::new();
+        };
+        self.messages
+            .iter()
+            .filter(|m| m.topic == i)
+            .copied()
+            .collect()
+    }
+
+    /// The first message on topic `name`, read.
+    pub fn first(&mut self, name: &str) -> Result<Option<Vec<u8>>, RecordingError> {
+        match self.on(name).first() {
+            Some(m) => Ok(Some(self.read(m)?)),
+            None => Ok(None),
+        }
+    }
+}
