@@ -6,7 +6,7 @@ import { state, $, guarded, showError, showNote, ALGORITHM_NAMES } from './state
 import { call } from './worker-client.js';
 import { Request } from './protocol.js';
 import { ready as coreReady } from './core.js';
-import { hooks, loadSample, openFiles, openZip, openRecording, entryFiles } from './sequence.js';
+import { hooks, loadSample, openFiles, openZip, openRecording, isRecording, entryFiles } from './sequence.js';
 import { goTo, play, updatePlayButton, SPEEDS } from './playback.js';
 import { bindPanels, setParamInputs, setHsvInputs, renderRects, addRect, pickAt, setMode } from './panels.js';
 import { resultJson, dloJson, download } from './export.js';
@@ -45,8 +45,8 @@ $('folder').onchange = guarded(async (e) => {
 $('recording').onchange = guarded(async (e) => {
   const files = [...e.target.files];
   e.target.value = '';
-  const bag = files.find((f) => /\.bag$/i.test(f.name));
-  if (!bag) throw new Error('Pick a .bag recording (and, optionally, its dlo.json).');
+  const bag = files.find((f) => isRecording(f.name));
+  if (!bag) throw new Error('Pick a .bag or .db3 recording (and, optionally, its dlo.json).');
   await openRecording(bag, files.find((f) => /\.json$/i.test(f.name)) || null);
 });
 $('zip').onchange = guarded(async (e) => {
@@ -87,7 +87,7 @@ $('export').onclick = guarded(async () => {
 
 $('save-dlo').onclick = guarded(async () => {
   if (!state.seq) return;
-  download(`${state.seq.name.replace(/\.(zip|bag)$/i, '')}.dlo.json`, dloJson());
+  download(`${state.seq.name.replace(/\.(zip|bag|db3)$/i, '')}.dlo.json`, dloJson());
 });
 
 // ---------- start ----------

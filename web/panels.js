@@ -134,8 +134,9 @@ export function bindPanels() {
     if (state.mode === 'pick' && state.frame) {
       const [x, y] = imagePoint(e);
       setMode('pick');
-      await pickAt(x, y);
+      // The hint has been followed: it goes before the re-tracking starts.
       if (state.note) $('message').hidden = true;
+      await pickAt(x, y);
       return;
     }
     if (!dragStart) return;

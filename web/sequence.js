@@ -23,8 +23,9 @@ async function openSequence(name, paths, read, fromZip = false) {
   await finishOpening(generation, { name, info, read, fromZip, fromRecording: false });
 }
 
-// Camera recordings the page reads (ROS1 bag 2.0: RealSense Viewer, rs-record, realsense-ros).
-export const isRecording = (name) => /\.bag$/i.test(name);
+// Camera recordings the page reads: ROS1 .bag (RealSense Viewer, rs-record
+// up to 2.55, realsense-ros) and rosbag2 .db3 (librealsense 2.59, ROS 2).
+export const isRecording = (name) => /\.(bag|db3)$/i.test(name);
 
 // A recording, with an optional dlo.json picked or dropped beside it. The
 // worker reads the file in slices; without a dlo.json, the user picks the

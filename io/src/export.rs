@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use crate::error::SequenceError;
-use crate::sequence::{IntrinsicsFile, OcclusionConfig, Sequence};
+use crate::sequence::{DecodedFrame, IntrinsicsFile, OcclusionConfig, Sequence};
 use crate::source::Source;
 use crate::write::{encode_depth_png, encode_rgb_png, write_file, write_json};
 
@@ -48,17 +48,47 @@ pub fn export_sequence<S: Source>(
         .collect();
     write_json(&dir.join("dlo.json"), &config)?;
     let total = range.len();
-    for (n, i) in range.enumerate() {
-        let f = seq.frame(i)?;
-        write_file(
-            &dir.join(format!("color/{n:06}.png")),
-            &encode_rgb_png(f.width, f.height, &f.color)?,
-        )?;
-        write_file(
-            &dir.join(format!("depth/{n:06}.png")),
-            &encode_depth_png(f.width, f.height, &f.depth)?,
-        )?;
-        on_frame(n + 1, total);
-    }
+    // Frames are read (and aligned) here while a second thread encodes and
+    // writes the previous ones: on two cores the slower of the two sets the pace.
+    std::thread::scope(|scope| {
+        let (to_writer, frames) = std::sync::mpsc::sync_channel::<(usize, DecodedFrame)>(2);
+        let writer = scope.spawn(move || -> Result<(), SequenceError> {
+            for (n, f) in frames {
+                write_file(
+                    &dir.join(format!("color/{n:06}.png")),
+                    &encode_rgb_png(f.width, f.height, &f.color)?,
+                )?;
+                write_file(
+                    &dir.join(format!("depth/{n:06}.png")),
+                    &encode_depth_png(f.width, f.height, &f.depth)?,
+                )?;
+            }
+            Ok(())
+        });
+        let mut read = Ok(());
+        for (n, i) in range.enumerate() {
+            match seq.frame(i) {
+                // A writer that stopped has an error to report, below.
+                Ok(f) => {
+                    if to_writer.send((n, f)).is_err() {
+                        break;
+                    }
+                }
+                Err(e) => {
+                    read = Err(e);
+                    break;
+                }
+            }
+            on_frame(n + 1, total);
+        }
+        drop(to_writer);
+        let written = writer.join().unwrap_or_else(|_| {
+            Err(SequenceError::invalid(
+                &dir.display().to_string(),
+                "the writer thread failed",
+            ))
+        });
+        read.and(written)
+    })?;
     Ok(total)
 }

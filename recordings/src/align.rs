@@ -55,9 +55,14 @@ pub struct Intrinsics {
 
 impl Intrinsics {
     /// Pixel of a point in this camera's frame (metres), as `rs2_project_point_to_pixel`.
+    #[inline]
     pub fn project(&self, p: [f32; 3]) -> [f32; 2] {
-        let mut x = p[0] / p[2];
-        let mut y = p[1] / p[2];
+        self.project_normalised(p[0] / p[2], p[1] / p[2])
+    }
+
+    /// Pixel of the normalised image point `(x, y)` (a point at depth 1).
+    #[inline]
+    pub fn project_normalised(&self, mut x: f32, mut y: f32) -> [f32; 2] {
         let [k1, k2, p1, p2, k3] = self.coeffs;
         match self.model {
             Distortion::ModifiedBrownConrady => {
@@ -127,6 +132,20 @@ impl Intrinsics {
             ));
         }
         Ok(())
+    }
+}
+
+/// `v` rounded half to even, as SSE's `cvtps2dq` does, without a call to
+/// `rintf`: adding and taking away 1.5 * 2^23 leaves the nearest integer
+/// (ties to even, the default rounding) for |v| < 2^22; other values take
+/// the library's rounding.
+#[inline]
+fn round_half_even(v: f32) -> i32 {
+    const MAGIC: f32 = 12_582_912.0;
+    if v.abs() < 4_194_304.0 {
+        ((v + MAGIC) - MAGIC) as i32
+    } else {
+        v.round_ties_even() as i32
     }
 }
 
@@ -287,76 +306,151 @@ pub fn align_depth_to_color(
     depth_scale: f32,
     arithmetic: AlignArithmetic,
 ) -> Result<Vec<u16>, RecordingError> {
-    let (dw, dh) = (depth_intr.width as usize, depth_intr.height as usize);
-    if depth.len() != dw * dh {
-        return Err(RecordingError::message(
-            "depth",
-            format!("{} depth values for a {dw}x{dh} depth image", depth.len()),
-        ));
+    Aligner::new(*depth_intr, *color_intr, *depth_to_color, arithmetic).align(depth, depth_scale)
+}
+
+/// An alignment set up once for a pair of cameras: the rays through every
+/// depth pixel's corners (they do not depend on the depth) are computed
+/// here, so each frame only transforms and projects.
+#[derive(Debug, Clone)]
+pub struct Aligner {
+    depth_intr: Intrinsics,
+    color_intr: Intrinsics,
+    depth_to_color: Extrinsics,
+    arithmetic: AlignArithmetic,
+    span: bool,
+    /// The ray `(x, y, 1)` through each pixel's top-left corner, rotated
+    /// into the colour camera (`R (x, y, 1)`), row-major.
+    top_left: Vec<[f32; 3]>,
+    /// The same through each bottom-right corner (empty when not spanned).
+    bottom_right: Vec<[f32; 3]>,
+}
+
+impl Aligner {
+    /// The aligner from `depth_intr`'s camera into `color_intr`'s.
+    pub fn new(
+        depth_intr: Intrinsics,
+        color_intr: Intrinsics,
+        depth_to_color: Extrinsics,
+        arithmetic: AlignArithmetic,
+    ) -> Self {
+        let sse = arithmetic == AlignArithmetic::X86Sse;
+        let span = !sse || fills_span(&depth_intr, &color_intr);
+        let ray = |px: f32, py: f32| -> [f32; 2] {
+            if !sse {
+                // rs2_deproject_pixel_to_point at depth 1: its x and y are
+                // what it multiplies by the depth.
+                let p = depth_intr.deproject([px, py], 1.0);
+                return [p[0], p[1]];
+            }
+            // The SSE aligner's ray: `(x - ppx) / fx`, undistorted for inverse Brown-Conrady only.
+            let mut x = (px - depth_intr.ppx) / depth_intr.fx;
+            let mut y = (py - depth_intr.ppy) / depth_intr.fy;
+            if depth_intr.model == Distortion::InverseBrownConrady {
+                let [k1, k2, p1, p2, k3] = depth_intr.coeffs;
+                let r2 = x * x + y * y;
+                let f = 1.0 + k1 * r2 + k2 * r2 * r2 + k3 * r2 * r2 * r2;
+                let ux = x * f + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
+                let uy = y * f + 2.0 * p2 * x * y + p1 * (r2 + 2.0 * y * y);
+                x = ux;
+                y = uy;
+            }
+            [x, y]
+        };
+        let (w, h) = (depth_intr.width as usize, depth_intr.height as usize);
+        let r = depth_to_color.rotation;
+        let map = |offset: f32| -> Vec<[f32; 3]> {
+            (0..w * h)
+                .map(|k| {
+                    let [x, y] = ray((k % w) as f32 + offset, (k / w) as f32 + offset);
+                    [
+                        r[0] * x + r[3] * y + r[6],
+                        r[1] * x + r[4] * y + r[7],
+                        r[2] * x + r[5] * y + r[8],
+                    ]
+                })
+                .collect()
+        };
+        let top_left = map(-0.5);
+        let bottom_right = if span { map(0.5) } else { Vec::new() };
+        Self {
+            depth_intr,
+            color_intr,
+            depth_to_color,
+            arithmetic,
+            span,
+            top_left,
+            bottom_right,
+        }
     }
-    let (cw, ch) = (color_intr.width as i64, color_intr.height as i64);
-    let sse = arithmetic == AlignArithmetic::X86Sse;
-    let span = !sse || fills_span(depth_intr, color_intr);
-    // The SSE aligner's ray: `(x - ppx) / fx`, undistorted for inverse Brown-Conrady only.
-    let sse_ray = |px: f32, py: f32| {
-        let mut x = (px - depth_intr.ppx) / depth_intr.fx;
-        let mut y = (py - depth_intr.ppy) / depth_intr.fy;
-        if depth_intr.model == Distortion::InverseBrownConrady {
-            let [k1, k2, p1, p2, k3] = depth_intr.coeffs;
-            let r2 = x * x + y * y;
-            let f = 1.0 + k1 * r2 + k2 * r2 * r2 + k3 * r2 * r2 * r2;
-            let ux = x * f + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
-            let uy = y * f + 2.0 * p2 * x * y + p1 * (r2 + 2.0 * y * y);
-            x = ux;
-            y = uy;
-        }
-        (x, y)
-    };
-    let r = &depth_to_color.rotation;
-    let t = &depth_to_color.translation;
-    // The colour pixel of depth pixel corner (px, py) at depth d metres.
-    let corner = |px: f32, py: f32, d: f32| -> (i64, i64) {
-        if !sse {
-            let p = depth_intr.deproject([px, py], d);
-            let q = color_intr.project(depth_to_color.apply(p));
+
+    /// `true` when this aligner is the one for these cameras and arithmetic.
+    pub fn is_for(
+        &self,
+        depth_intr: &Intrinsics,
+        color_intr: &Intrinsics,
+        depth_to_color: &Extrinsics,
+        arithmetic: AlignArithmetic,
+    ) -> bool {
+        self.depth_intr == *depth_intr
+            && self.color_intr == *color_intr
+            && self.depth_to_color == *depth_to_color
+            && self.arithmetic == arithmetic
+    }
+
+    /// The colour pixel of the corner with ray `(x, y)` at depth `d` metres.
+    #[inline]
+    fn corner(&self, ray: [f32; 3], d: f32) -> (i32, i32) {
+        let t = &self.depth_to_color.translation;
+        let qz = d * ray[2] + t[2];
+        let q = self
+            .color_intr
+            .project_normalised((d * ray[0] + t[0]) / qz, (d * ray[1] + t[1]) / qz);
+        if self.arithmetic == AlignArithmetic::Portable {
             // Truncation, as a C cast of `p + 0.5`.
-            return ((q[0] + 0.5) as i64, (q[1] + 0.5) as i64);
+            return ((q[0] + 0.5) as i32, (q[1] + 0.5) as i32);
         }
-        let (x, y) = sse_ray(px, py);
-        let (px, py) = (d * x, d * y);
-        // Summed in the SSE aligner's order: r0 x + (r3 y + (r6 z + t)).
-        let qx = r[0] * px + (r[3] * py + (r[6] * d + t[0]));
-        let qy = r[1] * px + (r[4] * py + (r[7] * d + t[1]));
-        let qz = r[2] * px + (r[5] * py + (r[8] * d + t[2]));
-        let p = color_intr.project([qx / qz, qy / qz, 1.0]);
-        (
-            (p[0] + 0.5).round_ties_even() as i64,
-            (p[1] + 0.5).round_ties_even() as i64,
-        )
-    };
-    let mut out = vec![0u16; (cw * ch) as usize];
-    for dy in 0..dh {
-        for dx in 0..dw {
-            let z = depth[dy * dw + dx];
+        (round_half_even(q[0] + 0.5), round_half_even(q[1] + 0.5))
+    }
+
+    /// `depth` (the depth camera's size) aligned to the colour camera.
+    pub fn align(&self, depth: &[u16], depth_scale: f32) -> Result<Vec<u16>, RecordingError> {
+        let (dw, dh) = (
+            self.depth_intr.width as usize,
+            self.depth_intr.height as usize,
+        );
+        if depth.len() != dw * dh {
+            return Err(RecordingError::message(
+                "depth",
+                format!("{} depth values for a {dw}x{dh} depth image", depth.len()),
+            ));
+        }
+        let (cw, ch) = (self.color_intr.width as i32, self.color_intr.height as i32);
+        let mut out = vec![0u16; (cw as usize) * (ch as usize)];
+        for (k, &z) in depth.iter().enumerate() {
             if z == 0 {
                 continue;
             }
             let d = f32::from(z) * depth_scale;
-            let (x0, y0) = corner(dx as f32 - 0.5, dy as f32 - 0.5, d);
-            let (x1, y1) = if span {
-                corner(dx as f32 + 0.5, dy as f32 + 0.5, d)
+            let (x0, y0) = self.corner(self.top_left[k], d);
+            let (x1, y1) = if self.span {
+                self.corner(self.bottom_right[k], d)
             } else {
                 (x0, y0)
             };
+            let (xs, xe) = (x0.max(0), x1.min(cw - 1));
+            if xs > xe {
+                continue;
+            }
             for y in y0.max(0)..=y1.min(ch - 1) {
-                for x in x0.max(0)..=x1.min(cw - 1) {
-                    let o = &mut out[(y * cw + x) as usize];
+                let row = y as usize * cw as usize;
+                for o in &mut out[row + xs as usize..=row + xe as usize] {
                     *o = if *o == 0 { z } else { (*o).min(z) };
                 }
             }
         }
+        Ok(out)
     }
-    Ok(out)
 }
 
 #[cfg(test)]
@@ -458,6 +552,23 @@ mod tests {
         .expect("aligns");
         assert!(!fills_span(&d, &d));
         assert_eq!(x86.iter().filter(|&&v| v != 0).count(), 6, "{x86:?}");
+    }
+
+    #[test]
+    fn rounding_is_half_to_even_like_sse() {
+        for (v, r) in [
+            (0.5f32, 0),
+            (1.5, 2),
+            (2.5, 2),
+            (-0.5, 0),
+            (-1.5, -2),
+            (2.4999, 2),
+            (7.0, 7),
+        ] {
+            assert_eq!(round_half_even(v), r, "{v}");
+            assert_eq!(round_half_even(v), v.round_ties_even() as i32, "{v}");
+        }
+        assert_eq!(round_half_even(1e9), 1_000_000_000);
     }
 
     #[test]

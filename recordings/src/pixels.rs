@@ -179,10 +179,17 @@ pub fn color(
             })
         }
     };
-    let mut out = Vec::with_capacity(e.pixels() * 3);
-    for row in rows(&im, e, bpp)? {
-        for px in row.chunks_exact(bpp) {
-            out.extend(order.iter().map(|&c| px[c]));
+    let mut out = vec![0u8; e.pixels() * 3];
+    let row_len = e.width as usize * 3;
+    for (row, dst) in rows(&im, e, bpp)?.zip(out.chunks_exact_mut(row_len)) {
+        if order == [0, 1, 2] && bpp == 3 {
+            dst.copy_from_slice(row);
+            continue;
+        }
+        for (px, o) in row.chunks_exact(bpp).zip(dst.chunks_exact_mut(3)) {
+            o[0] = px[order[0]];
+            o[1] = px[order[1]];
+            o[2] = px[order[2]];
         }
     }
     Ok(out)

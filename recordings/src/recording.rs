@@ -7,7 +7,7 @@
 //! aligned here) and realsense-ros's (`.../color/image_raw` with
 //! `.../aligned_depth_to_color/image_raw`, raw or compressed, already aligned).
 
-use crate::align::{align_depth_to_color, AlignArithmetic, Distortion, Extrinsics, Intrinsics};
+use crate::align::{AlignArithmetic, Aligner, Distortion, Extrinsics, Intrinsics};
 use crate::bytes::ByteSource;
 use crate::error::RecordingError;
 use crate::pairing::{fps_from_times, half_period_ns, pair_by_time, FramePair};
@@ -102,6 +102,7 @@ pub struct Recording<R: ByteSource> {
     color_msgs: Vec<Msg>,
     depth_msgs: Vec<Msg>,
     start_ns: u64,
+    aligner: Option<Aligner>,
 }
 
 fn expect(s: &Stream) -> Expect<'_> {
@@ -359,6 +360,7 @@ impl<R: ByteSource> Recording<R> {
             color_msgs,
             depth_msgs,
             start_ns,
+            aligner: None,
         })
     }
 
@@ -571,15 +573,22 @@ impl<R: ByteSource> Recording<R> {
             &expect(&self.depth),
             self.depth_units,
         )?;
-        let depth = match &self.depth_to_color {
-            Some(ex) => align_depth_to_color(
-                &depth,
-                &self.depth.intrinsics,
-                &self.color.intrinsics,
-                ex,
-                self.depth_units as f32,
-                self.align,
-            )?,
+        let depth = match self.depth_to_color {
+            Some(ex) => {
+                let (d, c, arithmetic) = (self.depth.intrinsics, self.color.intrinsics, self.align);
+                // Set up once; set up again if a caller changed the cameras or the arithmetic.
+                let stale = self
+                    .aligner
+                    .as_ref()
+                    .is_none_or(|a| !a.is_for(&d, &c, &ex, arithmetic));
+                if stale {
+                    self.aligner = Some(Aligner::new(d, c, ex, arithmetic));
+                }
+                match &self.aligner {
+                    Some(a) => a.align(&depth, self.depth_units as f32)?,
+                    None => depth,
+                }
+            }
             None => depth,
         };
         Ok(RecordedFrame {

@@ -63,6 +63,16 @@ pub struct MessageRef {
 #[derive(Debug, Clone, Copy)]
 struct ChunkPlace {
     pos: u64,
+    /// Where an uncompressed chunk's data starts in the file: its messages
+    /// are read from there directly, without reading the whole chunk.
+    plain_data: Option<u64>,
+}
+
+/// The file offset of an uncompressed chunk's data, from its record.
+fn plain_data(rec: &Record) -> Result<Option<u64>, RecordingError> {
+    let f = fields(&rec.header, rec.header_pos)?;
+    let compression = field(&f, "compression", rec.header_pos)?;
+    Ok((compression == b"none").then_some(rec.data_pos))
 }
 
 /// An opened ROS1 bag: its connections and the index of every message.
@@ -403,7 +413,10 @@ impl<R: ByteSource> Bag<R> {
         for (chunk_pos, count) in chunk_infos {
             let chunk = read_record(&mut self.src, chunk_pos)?;
             let chunk_index = self.chunks.len() as u32;
-            self.chunks.push(ChunkPlace { pos: chunk_pos });
+            self.chunks.push(ChunkPlace {
+                pos: chunk_pos,
+                plain_data: plain_data(&chunk)?,
+            });
             let mut at = chunk.end();
             for _ in 0..count {
                 let rec = read_record(&mut self.src, at)?;
@@ -497,7 +510,11 @@ impl<R: ByteSource> Bag<R> {
                     }
                 }
                 // Only a chunk read whole counts: its messages are added together.
-                self.chunks.push(ChunkPlace { pos });
+                let rec = read_record(&mut self.src, pos)?;
+                self.chunks.push(ChunkPlace {
+                    pos,
+                    plain_data: plain_data(&rec)?,
+                });
                 for item in found {
                     match item {
                         Ok(m) => self.add_message(m)?,
@@ -522,6 +539,19 @@ impl<R: ByteSource> Bag<R> {
             .get(m.chunk as usize)
             .copied()
             .ok_or_else(|| RecordingError::corrupt(0, "message in an unknown chunk"))?;
+        if let Some(data_pos) = place.plain_data {
+            // The message record read where it lies: one read, no chunk buffer.
+            let at = data_pos + u64::from(m.offset);
+            let rec = read_record(&mut self.src, at)?;
+            let f = fields(&rec.header, rec.header_pos)?;
+            if op(&f, at)? != OP_MESSAGE || field_u32(&f, "conn", at)? != m.conn {
+                return Err(RecordingError::corrupt(
+                    at,
+                    "index does not point at a message of its connection",
+                ));
+            }
+            return read_data(&mut self.src, &rec);
+        }
         let chunk = match self.cache.get(m.chunk) {
             Some(c) => c,
             None => {

@@ -373,9 +373,9 @@ function worstDifference(web, ref) {
   return worst;
 }
 
-await test('a RealSense Viewer .bag opens by file input with its dlo.json, seeks, and tracks as the command does', async () => {
+for (const [name, writer] of [['librealsense.bag', 'librealsense 2.55 .bag'], ['librealsense.db3', 'librealsense 2.59 .db3']]) await test(`a RealSense Viewer recording (${writer}) opens by file input with its dlo.json, seeks, and tracks as the command does`, async () => {
   const page = await newPage('?autoplay=0');
-  await page.setInputFiles('#recording', [path.join(recordings, 'librealsense.bag'), path.join(recordings, 'reference/dlo.json')]);
+  await page.setInputFiles('#recording', [path.join(recordings, name), path.join(recordings, 'reference/dlo.json')]);
   await page.waitForFunction(() => window.upetrack.state.seq && window.upetrack.state.seq.fromRecording && window.upetrack.state.tracked >= 0, null, { timeout: 30000 });
   assert((await messageOf(page)) === '', await messageOf(page));
   const details = await page.evaluate(() => document.getElementById('seq-details').textContent);
@@ -383,19 +383,21 @@ await test('a RealSense Viewer .bag opens by file input with its dlo.json, seeks
   await page.evaluate(() => window.upetrack.goTo(5));
   const seek = await page.evaluate(() => ({ index: window.upetrack.state.index, w: window.upetrack.state.frame.width, timeline: document.getElementById('timeline').value }));
   assert(seek.index === 5 && seek.w === 320 && seek.timeline === '5', `seek: ${JSON.stringify(seek)}`);
-  await page.screenshot({ path: path.join(artifacts, 'recording.png') });
+  await page.screenshot({ path: path.join(artifacts, `recording-${name.replace('.', '-')}.png`) });
   const web = await page.evaluate(() => window.upetrack.trackAll());
-  const ref = nativeTrack([path.join(recordings, 'librealsense.bag'), '--dlo', path.join(recordings, 'reference/dlo.json')], 'rec-native');
+  const ref = nativeTrack([path.join(recordings, name), '--dlo', path.join(recordings, 'reference/dlo.json')], `${name}-native`);
   const worst = worstDifference(web, ref);
-  console.log(`     .bag on the page vs the command: largest difference ${worst.toExponential(2)} m over ${ref.frames.length} frames`);
+  console.log(`     ${name} on the page vs the command: largest difference ${worst.toExponential(2)} m over ${ref.frames.length} frames`);
   assert(worst === 0, `largest difference ${worst}`);
   await page.close();
 });
 
-await test('a realsense-ros .bag without dlo.json: the rope colour is picked by a click, tracked, and saved as dlo.json', async () => {
+for (const name of ['ros_bz2.bag', 'ros2_png.db3']) await test(`a realsense-ros recording (${name}) without dlo.json: the rope colour is picked by a click, tracked, and saved as dlo.json`, async () => {
   const page = await newPage('?autoplay=0');
-  await page.setInputFiles('#recording', path.join(recordings, 'ros_bz2.bag'));
-  await page.waitForFunction(() => window.upetrack.state.seq && window.upetrack.state.seq.fromRecording && window.upetrack.state.frame, null, { timeout: 30000 });
+  await page.setInputFiles('#recording', path.join(recordings, name));
+  // Opened once the first frame is drawn and the page has asked for a click.
+  await page.waitForFunction(() => window.upetrack.state.seq && window.upetrack.state.seq.fromRecording && window.upetrack.state.frame
+    && !document.getElementById('message').hidden, null, { timeout: 30000 });
   const hint = await messageOf(page);
   assert(/Click the rope/.test(hint), `no hint to click: ${hint}`);
   assert((await page.evaluate(() => window.upetrack.state.mode)) === 'pick', 'not in pick mode');
@@ -415,11 +417,11 @@ await test('a realsense-ros .bag without dlo.json: the rope colour is picked by 
   const dlo = await page.evaluate(() => window.upetrack.dloJson());
   const dloPath = path.join(tmp, 'picked.dlo.json');
   fs.writeFileSync(dloPath, JSON.stringify(dlo));
-  const ref = nativeTrack([path.join(recordings, 'ros_bz2.bag'), '--dlo', dloPath], 'picked-native');
+  const ref = nativeTrack([path.join(recordings, name), '--dlo', dloPath], `${name}-picked-native`);
   const worst = worstDifference(web, ref);
   console.log(`     picked ${JSON.stringify(dlo.segmentation)}; the command with the saved dlo.json: largest difference ${worst.toExponential(2)} m`);
   assert(worst === 0, `largest difference ${worst}`);
-  await page.screenshot({ path: path.join(artifacts, 'recording-picked.png') });
+  await page.screenshot({ path: path.join(artifacts, `recording-picked-${name.replace('.', '-')}.png`) });
   await page.close();
 });
 

@@ -12,8 +12,9 @@ use wasm_bindgen::prelude::*;
 use crate::{js_err, sequence_info, DecodedFrame};
 
 /// Bytes read at once for small reads (record headers, index entries): one
-/// slice serves many of them.
-pub const READ_BLOCK_BYTES: usize = 256 * 1024;
+/// slice serves the few reads around one place; larger blocks would read
+/// past the next chunk header for nothing.
+pub const READ_BLOCK_BYTES: usize = 16 * 1024;
 
 /// A `Blob` (a picked or dropped `File`) as random-access bytes.
 struct BlobBytes {
@@ -35,7 +36,9 @@ fn io_error(what: &str, e: JsValue) -> RecordingError {
 }
 
 impl BlobBytes {
-    fn slice(&self, start: u64, end: u64) -> Result<Vec<u8>, RecordingError> {
+    /// Bytes `start..start + out.len()` of the file, copied once into `out`.
+    fn slice_into(&self, start: u64, out: &mut [u8]) -> Result<(), RecordingError> {
+        let end = start + out.len() as u64;
         let part = self
             .blob
             .slice_with_f64_and_f64(start as f64, end as f64)
@@ -44,7 +47,12 @@ impl BlobBytes {
             .reader
             .read_as_array_buffer(&part)
             .map_err(|e| io_error("FileReaderSync", e))?;
-        Ok(js_sys::Uint8Array::new(&buffer).to_vec())
+        let view = js_sys::Uint8Array::new(&buffer);
+        if view.length() as usize != out.len() {
+            return Err(io_error("FileReaderSync", JsValue::from_str("short read")));
+        }
+        view.copy_to(out);
+        Ok(())
     }
 }
 
@@ -68,14 +76,15 @@ impl ByteSource for BlobBytes {
             }
         }
         if buf.len() >= READ_BLOCK_BYTES {
-            buf.copy_from_slice(&self.slice(offset, end)?);
-            return Ok(());
+            return self.slice_into(offset, buf);
         }
         let (start, bytes) = &self.block;
         let cached = offset >= *start && end <= start + bytes.len() as u64;
         if !cached {
             let block_end = (offset + READ_BLOCK_BYTES as u64).min(self.len);
-            self.block = (offset, self.slice(offset, block_end)?);
+            let mut block = vec![0u8; (block_end - offset) as usize];
+            self.slice_into(offset, &mut block)?;
+            self.block = (offset, block);
         }
         let (start, bytes) = &self.block;
         let from = (offset - start) as usize;
