@@ -25,6 +25,7 @@ From one synthetic scene (`upetrack synth dynamic-pull`, 8 frames, halved to
 - ros2_png.db3 (8 frames, PNG-compressed colour and compressedDepth depth)
   and ros2_raw.db3 (3 frames, raw images): realsense-ros's ROS 2 layout
   (/camera/camera/...) written by `rosbags` in rosbag2's SQLite storage;
+- ros2_png.mcap and ros2_raw.mcap: the same in rosbag2's MCAP storage;
 - ros_bz2.bag, ros_lz4.bag, ros_none.bag: realsense-ros's layout
   (/camera/color/image_raw bgr8, /camera/aligned_depth_to_color/image_raw
   16UC1 in mm, their camera_info) written by `rosbags`, one per chunk
@@ -245,9 +246,9 @@ def write_ros(cam, colors, depths, out=None, sizes=None):
                     wr.write(topics[f"{topic}/camera_info"], stamp, ts.serialize_ros1(info, Info.__msgtype__))
 
 
-def write_ros2(cam, colors, depths, out=None, sizes=(FRAMES, 3)):
+def write_ros2(cam, colors, depths, out=None, sizes=(FRAMES, 3), storage="db3"):
     import io
-    from rosbags.rosbag2 import Writer
+    from rosbags.rosbag2 import StoragePlugin, Writer
     from rosbags.typesys import Stores, get_typestore
 
     ts = get_typestore(Stores.ROS2_HUMBLE)
@@ -269,7 +270,8 @@ def write_ros2(cam, colors, depths, out=None, sizes=(FRAMES, 3)):
         with tempfile.TemporaryDirectory() as tmp:
             folder = Path(tmp) / "bag"
             topics = {}
-            with Writer(folder, version=8) as wr:
+            plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
+            with Writer(folder, version=8, storage_plugin=plugin) as wr:
                 for stream in ["color", "aligned_depth_to_color"]:
                     image = f"{base}/{stream}/image_raw"
                     if compressed:
@@ -299,8 +301,8 @@ def write_ros2(cam, colors, depths, out=None, sizes=(FRAMES, 3)):
                         image_conn, info_conn = topics[stream]
                         wr.write(image_conn, stamp, ts.serialize_cdr(msg, msg.__msgtype__))
                         wr.write(info_conn, stamp, ts.serialize_cdr(info, Info.__msgtype__))
-            db3 = next(folder.glob("*.db3"))
-            shutil.copy(db3, (out or OUT) / f"ros2_{name}.db3")
+            stored = next(folder.glob(f"*.{storage}"))
+            shutil.copy(stored, (out or OUT) / f"ros2_{name}.{storage}")
 
 
 def write_seeds(cam, colors, depths, v259):
@@ -318,6 +320,7 @@ def write_seeds(cam, colors, depths, v259):
     else:
         write_ros(small, c, d, out=seeds, sizes=[2, 2, 2])
         write_ros2(small, c, d, out=seeds, sizes=(2, 2))
+        write_ros2(small, c, d, out=seeds, sizes=(2, 2), storage="mcap")
         write_librealsense(small, c, d, path=seeds / "librealsense_lz4.bag", compress=True)
         write_librealsense(small, c, d, path=seeds / "librealsense_none.bag", compress=False)
     DEPTH_FX, DEPTH_PPX, DEPTH_PPY = saved
@@ -341,6 +344,7 @@ def main():
         write_goldens(rec, OUT / "golden")
         write_ros(cam, colors, depths)
         write_ros2(cam, colors, depths)
+        write_ros2(cam, colors, depths, sizes=(FRAMES, 3), storage="mcap")
     write_seeds(cam, colors, depths, v259)
     for f in sorted(OUT.rglob("*")):
         if f.is_file():

@@ -46,7 +46,7 @@ $('recording').onchange = guarded(async (e) => {
   const files = [...e.target.files];
   e.target.value = '';
   const bag = files.find((f) => isRecording(f.name));
-  if (!bag) throw new Error('Pick a .bag or .db3 recording (and, optionally, its dlo.json).');
+  if (!bag) throw new Error('Pick a .bag, .db3 or .mcap recording (and, optionally, its dlo.json).');
   await openRecording(bag, files.find((f) => /\.json$/i.test(f.name)) || null);
 });
 $('zip').onchange = guarded(async (e) => {
@@ -87,7 +87,7 @@ $('export').onclick = guarded(async () => {
 
 $('save-dlo').onclick = guarded(async () => {
   if (!state.seq) return;
-  download(`${state.seq.name.replace(/\.(zip|bag|db3)$/i, '')}.dlo.json`, dloJson());
+  download(`${state.seq.name.replace(/\.(zip|bag|db3|mcap)$/i, '')}.dlo.json`, dloJson());
 });
 
 // ---------- start ----------

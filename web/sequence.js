@@ -24,8 +24,8 @@ async function openSequence(name, paths, read, fromZip = false) {
 }
 
 // Camera recordings the page reads: ROS1 .bag (RealSense Viewer, rs-record
-// up to 2.55, realsense-ros) and rosbag2 .db3 (librealsense 2.59, ROS 2).
-export const isRecording = (name) => /\.(bag|db3)$/i.test(name);
+// up to 2.55, realsense-ros), rosbag2 .db3 (librealsense 2.59, ROS 2) and .mcap (ROS 2).
+export const isRecording = (name) => /\.(bag|db3|mcap)$/i.test(name);
 
 // A recording, with an optional dlo.json picked or dropped beside it. The
 // worker reads the file in slices; without a dlo.json, the user picks the

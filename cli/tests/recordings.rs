@@ -111,7 +111,7 @@ fn tracks_as_exported_and_near_the_original(name: &str) {
 fn ros_recordings_track_exactly_as_the_original() {
     let truth = reference();
     let original = track(&truth);
-    for name in ["ros_bz2.bag", "ros2_png.db3"] {
+    for name in ["ros_bz2.bag", "ros2_png.db3", "ros2_png.mcap"] {
         let rec = open_recording(
             &fixture(name),
             Some(&fixture("reference/dlo.json")),

@@ -15,6 +15,7 @@
 pub mod align;
 pub mod bytes;
 pub mod error;
+pub mod mcap;
 pub mod pairing;
 pub mod pixels;
 pub mod recording;

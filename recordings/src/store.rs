@@ -1,9 +1,10 @@
-//! The container under a recording, whichever it is: a ROS1 bag or a rosbag2
-//! SQLite database, seen as one list of topics and one time-ordered list of
-//! messages, each read on demand.
+//! The container under a recording, whichever it is: a ROS1 bag, a rosbag2
+//! SQLite database or an MCAP file, seen as one list of topics and one
+//! time-ordered list of messages, each read on demand.
 
 use crate::bytes::ByteSource;
 use crate::error::RecordingError;
+use crate::mcap::{self, Mcap};
 use crate::ros_msgs::Wire;
 use crate::rosbag1::{self, Bag};
 use crate::rosbag2::{self, Rosbag2};
@@ -22,6 +23,7 @@ pub struct Topic {
 enum At {
     Bag(rosbag1::MessageRef),
     Db(rosbag2::Message),
+    Mcap(mcap::MessageRef),
 }
 
 /// One message: its topic (an index into [`Store::topics`]), its time and its place.
@@ -37,6 +39,7 @@ pub struct Msg {
 enum Inner<R: ByteSource> {
     Bag(Bag<R>),
     Db(Rosbag2<R>),
+    Mcap(Mcap<R>),
 }
 
 /// An opened container.
@@ -52,7 +55,7 @@ pub struct Store<R: ByteSource> {
 
 /// `true` when `head` starts like a container this crate reads.
 pub fn is_container(head: &[u8]) -> bool {
-    rosbag1::is_bag(head) || sqlite::is_sqlite(head)
+    rosbag1::is_bag(head) || sqlite::is_sqlite(head) || mcap::is_mcap(head)
 }
 
 fn topic_index(topics: &mut Vec<Topic>, name: &str, msg_type: &str) -> usize {
@@ -68,12 +71,59 @@ fn topic_index(topics: &mut Vec<Topic>, name: &str, msg_type: &str) -> usize {
 }
 
 impl<R: ByteSource> Store<R> {
-    /// Opens a ROS1 bag or a rosbag2 `.db3`, told apart by their first bytes.
+    /// Opens a ROS1 bag, a rosbag2 `.db3` or an `.mcap`, told apart by their first bytes.
     pub fn open(mut src: R) -> Result<Self, RecordingError> {
         let mut head = [0u8; 16];
         let n = head.len().min(src.len() as usize);
         src.read_at(0, &mut head[..n])?;
         let mut topics = Vec::new();
+        if mcap::is_mcap(&head[..n]) {
+            let m = Mcap::open(src)?;
+            let mut wire = None;
+            for c in m.channels.values() {
+                let w = match c.encoding.as_str() {
+                    "cdr" => Wire::Cdr,
+                    "ros1" => Wire::Ros1,
+                    other => {
+                        return Err(RecordingError::UnknownFormat {
+                            reason: format!(
+                                "channel {} is encoded as `{other}` (cdr and ros1 are read)",
+                                c.topic
+                            ),
+                        })
+                    }
+                };
+                if wire.is_some_and(|x| x != w) {
+                    return Err(RecordingError::UnknownFormat {
+                        reason: "an MCAP file mixing ROS1 and CDR messages".into(),
+                    });
+                }
+                wire = Some(w);
+            }
+            let ids: Vec<(u16, usize)> = m
+                .channels
+                .iter()
+                .map(|(id, c)| (*id, topic_index(&mut topics, &c.topic, &c.schema)))
+                .collect();
+            let messages = m
+                .messages
+                .iter()
+                .filter_map(|r| {
+                    let topic = ids.iter().find(|(id, _)| *id == r.channel)?.1;
+                    Some(Msg {
+                        topic,
+                        time_ns: r.time_ns,
+                        at: At::Mcap(*r),
+                    })
+                })
+                .collect();
+            return Ok(Self {
+                inner: Inner::Mcap(m),
+                topics,
+                messages,
+                wire: wire.unwrap_or(Wire::Cdr),
+            });
+        }
         if sqlite::is_sqlite(&head[..n]) {
             let db = Rosbag2::open(src)?;
             if let Some(t) = db.topics.iter().find(|t| t.serialization != "cdr") {
@@ -139,6 +189,7 @@ impl<R: ByteSource> Store<R> {
         match &self.inner {
             Inner::Bag(b) => &b.warnings,
             Inner::Db(_) => &[],
+            Inner::Mcap(m) => &m.warnings,
         }
     }
 
@@ -147,6 +198,7 @@ impl<R: ByteSource> Store<R> {
         match (&mut self.inner, &m.at) {
             (Inner::Bag(b), At::Bag(r)) => b.read(r),
             (Inner::Db(d), At::Db(r)) => d.read(r),
+            (Inner::Mcap(m), At::Mcap(r)) => m.read(r),
             _ => Err(RecordingError::corrupt(0, "a message of another container")),
         }
     }

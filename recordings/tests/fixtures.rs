@@ -151,6 +151,8 @@ fn ros_bags_give_back_the_frames_that_were_written() {
         ("ros_none.bag", 3),
         ("ros2_png.db3", 8),
         ("ros2_raw.db3", 3),
+        ("ros2_png.mcap", 8),
+        ("ros2_raw.mcap", 3),
     ] {
         let mut rec = open(name);
         assert_eq!(rec.layout, Layout::Ros, "{name}");
@@ -182,6 +184,26 @@ fn truncated_recording_plays_the_frames_before_the_cut() {
     assert!(!rec.warnings().is_empty());
     assert!(rec.len() >= 3 && rec.len() < 8, "{} frames", rec.len());
     rec.frame(0).expect("first frame still decodes");
+}
+
+#[test]
+fn mcap_without_its_summary_is_scanned() {
+    let bytes = std::fs::read(fixture("ros2_png.mcap")).expect("fixture");
+    let cut = bytes[..bytes.len() * 3 / 4].to_vec();
+    let mut rec = Recording::open(cut, &RecordingOptions::default()).expect("opens by scanning");
+    assert!(
+        rec.warnings().iter().any(|w| w.contains("no summary")),
+        "{:?}",
+        rec.warnings()
+    );
+    assert!(rec.len() >= 3 && rec.len() < 8, "{} frames", rec.len());
+    let (_, _, color) = png(&fixture("reference/color/000000.png"));
+    let f = rec.frame(0).expect("first frame still decodes");
+    assert!(f
+        .color
+        .iter()
+        .map(|&c| u16::from(c))
+        .eq(color.iter().copied()));
 }
 
 #[test]

@@ -392,7 +392,7 @@ for (const [name, writer] of [['librealsense.bag', 'librealsense 2.55 .bag'], ['
   await page.close();
 });
 
-for (const name of ['ros_bz2.bag', 'ros2_png.db3']) await test(`a realsense-ros recording (${name}) without dlo.json: the rope colour is picked by a click, tracked, and saved as dlo.json`, async () => {
+for (const name of ['ros_bz2.bag', 'ros2_png.db3', 'ros2_png.mcap']) await test(`a realsense-ros recording (${name}) without dlo.json: the rope colour is picked by a click, tracked, and saved as dlo.json`, async () => {
   const page = await newPage('?autoplay=0');
   await page.setInputFiles('#recording', path.join(recordings, name));
   // Opened once the first frame is drawn and the page has asked for a click.
