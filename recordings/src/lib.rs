@@ -14,6 +14,7 @@
 
 pub mod align;
 pub mod bytes;
+pub mod chunks;
 pub mod error;
 pub mod mcap;
 pub mod pairing;

@@ -8,22 +8,17 @@
 //! crate decompresses through C libraries, which do not build for the page.
 
 use std::collections::BTreeMap;
-use std::io::Read;
-use std::rc::Rc;
 
 use crate::bytes::{ByteSource, Cursor};
+use crate::chunks::{decompress, ChunkCache, MAX_CHUNK_BYTES};
 use crate::error::RecordingError;
 
 /// The first and last 8 bytes of every MCAP file.
 pub const MAGIC: &[u8] = b"\x89MCAP0\r\n";
 /// Largest record read whole outside a chunk (schemas, channels, indexes), bytes.
 pub const MAX_RECORD_BYTES: u64 = 64 << 20;
-/// Largest uncompressed chunk, bytes, checked before allocation.
-pub const MAX_CHUNK_BYTES: u64 = 256 << 20;
 /// Most messages indexed in one file.
 pub const MAX_MESSAGES: usize = 20_000_000;
-/// Decompressed chunks kept in memory, bytes.
-pub const CHUNK_CACHE_BYTES: usize = 192 << 20;
 
 const OP_FOOTER: u8 = 0x02;
 const OP_SCHEMA: u8 = 0x03;
@@ -81,7 +76,7 @@ pub struct Mcap<R: ByteSource> {
     /// Every message, in log-time order.
     pub messages: Vec<MessageRef>,
     chunks: Vec<ChunkPlace>,
-    cache: Vec<(u32, Rc<Vec<u8>>)>,
+    cache: ChunkCache,
     /// What was not read, and why.
     pub warnings: Vec<String>,
 }
@@ -147,53 +142,6 @@ fn records(
     })
 }
 
-/// Decompresses a chunk's records, refusing a declared size above the cap before allocation.
-fn decompress(
-    compression: &str,
-    size: u64,
-    data: &[u8],
-    at: u64,
-) -> Result<Vec<u8>, RecordingError> {
-    if size > MAX_CHUNK_BYTES {
-        return Err(RecordingError::TooLarge {
-            what: "uncompressed MCAP chunk in bytes",
-            size,
-            max: MAX_CHUNK_BYTES,
-        });
-    }
-    let mut out = Vec::with_capacity((size as usize).min(data.len().saturating_mul(8) + 4096));
-    let result = match compression {
-        "" => {
-            out.extend_from_slice(data);
-            Ok(0)
-        }
-        "lz4" => lz4_flex::frame::FrameDecoder::new(data)
-            .take(size + 1)
-            .read_to_end(&mut out),
-        "zstd" => ruzstd::decoding::StreamingDecoder::new(data)
-            .map_err(|e| RecordingError::corrupt(at, format!("zstd chunk: {e}")))?
-            .take(size + 1)
-            .read_to_end(&mut out),
-        other => {
-            return Err(RecordingError::UnsupportedCompression {
-                offset: at,
-                name: other.to_string(),
-            })
-        }
-    };
-    result.map_err(|e| RecordingError::corrupt(at, format!("{compression} chunk: {e}")))?;
-    if out.len() as u64 != size {
-        return Err(RecordingError::corrupt(
-            at,
-            format!(
-                "chunk declares {size} bytes uncompressed but holds {}",
-                out.len()
-            ),
-        ));
-    }
-    Ok(out)
-}
-
 /// A chunk record's body: (compression, uncompressed size, the records' bytes).
 fn chunk_parts(body: &[u8], at: u64) -> Result<(String, u64, &[u8]), RecordingError> {
     let mut c = Cursor::new(body, at);
@@ -225,7 +173,7 @@ impl<R: ByteSource> Mcap<R> {
             channels: BTreeMap::new(),
             messages: Vec::new(),
             chunks: Vec::new(),
-            cache: Vec::new(),
+            cache: ChunkCache::default(),
             warnings: Vec::new(),
         };
         let mut schemas: BTreeMap<u16, String> = BTreeMap::new();
@@ -447,7 +395,7 @@ impl<R: ByteSource> Mcap<R> {
                     OP_CHUNK => {
                         let (_, body, _) = read_record(&mut self.src, pos, MAX_CHUNK_BYTES)?;
                         let (compression, size, data) = chunk_parts(&body, body_at)?;
-                        let inner = decompress(&compression, size, data, pos)?;
+                        let inner = decompress(&compression, size, data.to_vec(), pos)?;
                         let chunk = self.chunks.len() as u32;
                         let mut found = Vec::new();
                         for r in records(&inner, 0) {
@@ -550,8 +498,8 @@ impl<R: ByteSource> Mcap<R> {
                 .chunks
                 .get(m.chunk as usize)
                 .ok_or_else(|| RecordingError::corrupt(0, "message in an unknown chunk"))?;
-            let chunk = match self.cache.iter().position(|(c, _)| *c == m.chunk) {
-                Some(i) => self.cache[i].1.clone(),
+            let chunk = match self.cache.get(m.chunk) {
+                Some(c) => c,
                 None => {
                     let (op, body, _) = read_record(&mut self.src, place.pos, MAX_CHUNK_BYTES)?;
                     if op != OP_CHUNK {
@@ -561,13 +509,8 @@ impl<R: ByteSource> Mcap<R> {
                         ));
                     }
                     let (compression, size, data) = chunk_parts(&body, place.pos + 9)?;
-                    let data = Rc::new(decompress(&compression, size, data, place.pos)?);
-                    self.cache.push((m.chunk, data.clone()));
-                    let mut total: usize = self.cache.iter().map(|(_, d)| d.len()).sum();
-                    while total > CHUNK_CACHE_BYTES && self.cache.len() > 1 {
-                        total -= self.cache.remove(0).1.len();
-                    }
-                    data
+                    let data = decompress(&compression, size, data.to_vec(), place.pos)?;
+                    self.cache.insert(m.chunk, data)
                 }
             };
             let start = usize::try_from(m.offset).unwrap_or(usize::MAX);

@@ -6,10 +6,9 @@
 //! record with everything before it kept.
 
 use std::collections::BTreeMap;
-use std::io::Read;
-use std::rc::Rc;
 
 use crate::bytes::{ByteSource, Cursor};
+use crate::chunks::{decompress, ChunkCache};
 use crate::error::RecordingError;
 
 /// The first bytes of every ROS1 bag 2.0.
@@ -17,18 +16,12 @@ pub const MAGIC: &[u8] = b"#ROSBAG V2.0\n";
 /// Largest record header read, bytes (real headers are under 1 KB; a
 /// connection's message definition is a few KB).
 pub const MAX_HEADER_BYTES: u32 = 1 << 20;
-/// Largest uncompressed chunk, bytes: checked against the chunk's declared
-/// size before anything is allocated or decompressed.
-pub const MAX_CHUNK_BYTES: u32 = 256 << 20;
 /// Largest compressed chunk read, bytes.
 pub const MAX_CHUNK_DATA_BYTES: u32 = 256 << 20;
 /// Most connections (topics) in one bag.
 pub const MAX_CONNECTIONS: usize = 65_536;
 /// Most messages indexed in one bag (a 4 GB D435i recording has about 10^5).
 pub const MAX_MESSAGES: usize = 20_000_000;
-/// Decompressed chunks kept in memory, bytes. With this cap a reader's memory
-/// stays under 300 MB whatever the size of the file.
-pub const CHUNK_CACHE_BYTES: usize = 192 << 20;
 
 const OP_MESSAGE: u8 = 0x02;
 const OP_BAG_HEADER: u8 = 0x03;
@@ -216,57 +209,6 @@ fn connection_from(rec_header: &[u8], data: &[u8], at: u64) -> Result<Connection
     })
 }
 
-/// Decompresses a chunk's data, refusing before allocation a declared size above the cap.
-fn decompress(
-    compression: &str,
-    size: u32,
-    data: Vec<u8>,
-    offset: u64,
-) -> Result<Vec<u8>, RecordingError> {
-    if size > MAX_CHUNK_BYTES {
-        return Err(RecordingError::TooLarge {
-            what: "uncompressed chunk in bytes",
-            size: u64::from(size),
-            max: u64::from(MAX_CHUNK_BYTES),
-        });
-    }
-    // Reserved up to a plausible ratio only: a tiny corrupt chunk declaring
-    // a huge size grows its buffer as data actually comes out.
-    let mut out = Vec::with_capacity((size as usize).min(data.len().saturating_mul(8) + 4096));
-    // One byte more than declared is read, so a chunk longer than it says is caught.
-    let limit = u64::from(size) + 1;
-    let result = match compression {
-        "none" => return check_size(data, size, offset),
-        "lz4" => lz4_flex::frame::FrameDecoder::new(data.as_slice())
-            .take(limit)
-            .read_to_end(&mut out),
-        "bz2" => bzip2::read::BzDecoder::new(data.as_slice())
-            .take(limit)
-            .read_to_end(&mut out),
-        other => {
-            return Err(RecordingError::UnsupportedCompression {
-                offset,
-                name: other.to_string(),
-            })
-        }
-    };
-    result.map_err(|e| RecordingError::corrupt(offset, format!("{compression} chunk: {e}")))?;
-    check_size(out, size, offset)
-}
-
-fn check_size(out: Vec<u8>, size: u32, offset: u64) -> Result<Vec<u8>, RecordingError> {
-    if out.len() != size as usize {
-        return Err(RecordingError::corrupt(
-            offset,
-            format!(
-                "chunk declares {size} bytes uncompressed but holds {}",
-                out.len()
-            ),
-        ));
-    }
-    Ok(out)
-}
-
 /// Reads and decompresses the chunk whose record starts at `pos`.
 fn load_chunk<R: ByteSource>(src: &mut R, pos: u64) -> Result<(Vec<u8>, Record), RecordingError> {
     let rec = read_record(src, pos)?;
@@ -284,7 +226,7 @@ fn load_chunk<R: ByteSource>(src: &mut R, pos: u64) -> Result<(Vec<u8>, Record),
         });
     }
     let data = read_data(src, &rec)?;
-    Ok((decompress(&compression, size, data, pos)?, rec))
+    Ok((decompress(&compression, u64::from(size), data, pos)?, rec))
 }
 
 /// The records inside a chunk's uncompressed data, as (offset, header, data).
@@ -556,7 +498,7 @@ impl<R: ByteSource> Bag<R> {
             Some(c) => c,
             None => {
                 let (data, _) = load_chunk(&mut self.src, place.pos)?;
-                self.cache.insert(m.chunk, Rc::new(data))
+                self.cache.insert(m.chunk, data)
             }
         };
         let start = m.offset as usize;
@@ -574,31 +516,5 @@ impl<R: ByteSource> Bag<R> {
             ));
         }
         Ok(c.bytes("message data")?.to_vec())
-    }
-}
-
-/// Decompressed chunks, least recently used dropped first, at most
-/// [`CHUNK_CACHE_BYTES`] in total (the last chunk read is always kept).
-#[derive(Default)]
-struct ChunkCache {
-    entries: Vec<(u32, Rc<Vec<u8>>)>,
-}
-
-impl ChunkCache {
-    fn get(&mut self, chunk: u32) -> Option<Rc<Vec<u8>>> {
-        let i = self.entries.iter().position(|(c, _)| *c == chunk)?;
-        let entry = self.entries.remove(i);
-        let data = entry.1.clone();
-        self.entries.push(entry);
-        Some(data)
-    }
-
-    fn insert(&mut self, chunk: u32, data: Rc<Vec<u8>>) -> Rc<Vec<u8>> {
-        self.entries.push((chunk, data.clone()));
-        let mut total: usize = self.entries.iter().map(|(_, d)| d.len()).sum();
-        while total > CHUNK_CACHE_BYTES && self.entries.len() > 1 {
-            total -= self.entries.remove(0).1.len();
-        }
-        data
     }
 }

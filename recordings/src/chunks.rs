@@ -1,0 +1,134 @@
+//! What the chunked containers (ROS1 bags, MCAP) share: decompressing a
+//! chunk with its declared size checked before anything is allocated, and a
+//! bounded cache of decompressed chunks.
+
+use std::io::Read;
+use std::rc::Rc;
+
+use crate::error::RecordingError;
+
+/// Largest uncompressed chunk, bytes: checked against the chunk's declared
+/// size before anything is allocated or decompressed.
+pub const MAX_CHUNK_BYTES: u64 = 256 << 20;
+/// Decompressed chunks kept in memory, bytes. With this cap a reader's memory
+/// stays under 300 MB whatever the size of the file.
+pub const CHUNK_CACHE_BYTES: usize = 192 << 20;
+
+/// `data` decompressed with `compression` (`none` or empty, `lz4` frames,
+/// `bz2`, `zstd`) to exactly `size` bytes; `offset` names the chunk in errors.
+pub fn decompress(
+    compression: &str,
+    size: u64,
+    data: Vec<u8>,
+    offset: u64,
+) -> Result<Vec<u8>, RecordingError> {
+    if size > MAX_CHUNK_BYTES {
+        return Err(RecordingError::TooLarge {
+            what: "uncompressed chunk in bytes",
+            size,
+            max: MAX_CHUNK_BYTES,
+        });
+    }
+    // Reserved up to a plausible ratio only: a tiny corrupt chunk declaring
+    // a huge size grows its buffer as data actually comes out.
+    let mut out = Vec::with_capacity((size as usize).min(data.len().saturating_mul(8) + 4096));
+    // One byte more than declared is read, so a chunk longer than it says is caught.
+    let limit = size + 1;
+    let corrupt =
+        |e: std::io::Error| RecordingError::corrupt(offset, format!("{compression} chunk: {e}"));
+    match compression {
+        "none" | "" => return check_size(data, size, offset),
+        "lz4" => lz4_flex::frame::FrameDecoder::new(data.as_slice())
+            .take(limit)
+            .read_to_end(&mut out)
+            .map_err(corrupt)?,
+        "bz2" => bzip2::read::BzDecoder::new(data.as_slice())
+            .take(limit)
+            .read_to_end(&mut out)
+            .map_err(corrupt)?,
+        "zstd" => ruzstd::decoding::StreamingDecoder::new(data.as_slice())
+            .map_err(|e| RecordingError::corrupt(offset, format!("zstd chunk: {e}")))?
+            .take(limit)
+            .read_to_end(&mut out)
+            .map_err(corrupt)?,
+        other => {
+            return Err(RecordingError::UnsupportedCompression {
+                offset,
+                name: other.to_string(),
+            })
+        }
+    };
+    check_size(out, size, offset)
+}
+
+fn check_size(out: Vec<u8>, size: u64, offset: u64) -> Result<Vec<u8>, RecordingError> {
+    if out.len() as u64 != size {
+        return Err(RecordingError::corrupt(
+            offset,
+            format!(
+                "chunk declares {size} bytes uncompressed but holds {}",
+                out.len()
+            ),
+        ));
+    }
+    Ok(out)
+}
+
+/// Decompressed chunks, least recently used dropped first, at most
+/// [`CHUNK_CACHE_BYTES`] in total (the last chunk read is always kept).
+#[derive(Default)]
+pub struct ChunkCache {
+    entries: Vec<(u32, Rc<Vec<u8>>)>,
+}
+
+impl ChunkCache {
+    /// Chunk `chunk`, if it is held.
+    pub fn get(&mut self, chunk: u32) -> Option<Rc<Vec<u8>>> {
+        let i = self.entries.iter().position(|(c, _)| *c == chunk)?;
+        let entry = self.entries.remove(i);
+        let data = entry.1.clone();
+        self.entries.push(entry);
+        Some(data)
+    }
+
+    /// Holds `data` as chunk `chunk`, dropping the oldest beyond the cap.
+    pub fn insert(&mut self, chunk: u32, data: Vec<u8>) -> Rc<Vec<u8>> {
+        let data = Rc::new(data);
+        self.entries.push((chunk, data.clone()));
+        let mut total: usize = self.entries.iter().map(|(_, d)| d.len()).sum();
+        while total > CHUNK_CACHE_BYTES && self.entries.len() > 1 {
+            total -= self.entries.remove(0).1.len();
+        }
+        data
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn declared_size_is_checked_before_and_after() {
+        assert!(matches!(
+            decompress("lz4", MAX_CHUNK_BYTES + 1, vec![0; 8], 5),
+            Err(RecordingError::TooLarge { .. })
+        ));
+        assert!(decompress("none", 3, vec![1, 2, 3], 0).is_ok());
+        assert!(matches!(
+            decompress("", 4, vec![1, 2, 3], 0),
+            Err(RecordingError::Corrupt { .. })
+        ));
+        assert!(matches!(
+            decompress("brotli", 3, vec![1, 2, 3], 0),
+            Err(RecordingError::UnsupportedCompression { .. })
+        ));
+    }
+
+    #[test]
+    fn cache_keeps_the_newest_within_its_cap() {
+        let mut c = ChunkCache::default();
+        c.insert(1, vec![0; 8]);
+        c.insert(2, vec![0; 8]);
+        assert!(c.get(1).is_some() && c.get(2).is_some() && c.get(3).is_none());
+    }
+}
