@@ -1,6 +1,6 @@
 //! What the chunked containers (ROS1 bags, MCAP) share: decompressing a
-//! chunk with its declared size checked before anything is allocated, and a
-//! bounded cache of decompressed chunks.
+//! chunk with its declared size checked before anything is allocated, a
+//! bounded cache of decompressed chunks, and how a scan says where it stopped.
 
 use std::io::Read;
 use std::rc::Rc;
@@ -72,6 +72,11 @@ fn check_size(out: Vec<u8>, size: u64, offset: u64) -> Result<Vec<u8>, Recording
         ));
     }
     Ok(out)
+}
+
+/// The warning of a scan that stopped at byte `pos` on `e`, keeping `kept` messages.
+pub fn scan_stopped(pos: u64, e: &RecordingError, kept: usize) -> String {
+    format!("reading stopped at byte {pos} ({e}); the {kept} messages before it are kept")
 }
 
 /// Decompressed chunks, least recently used dropped first, at most

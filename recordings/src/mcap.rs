@@ -430,10 +430,8 @@ impl<R: ByteSource> Mcap<R> {
                 Ok(None) => break,
                 Err(e @ RecordingError::TooLarge { .. }) => return Err(e),
                 Err(e) => {
-                    self.warnings.push(format!(
-                        "reading stopped at byte {pos} ({e}); the {} messages before it are kept",
-                        self.messages.len()
-                    ));
+                    self.warnings
+                        .push(crate::chunks::scan_stopped(pos, &e, self.messages.len()));
                     break;
                 }
             }

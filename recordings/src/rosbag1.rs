@@ -407,10 +407,8 @@ impl<R: ByteSource> Bag<R> {
                 Ok(next) => pos = next,
                 Err(e @ RecordingError::TooLarge { .. }) => return Err(e),
                 Err(e) => {
-                    self.warnings.push(format!(
-                        "reading stopped at byte {pos} ({e}); the {} messages before it are kept",
-                        self.messages.len()
-                    ));
+                    self.warnings
+                        .push(crate::chunks::scan_stopped(pos, &e, self.messages.len()));
                     break;
                 }
             }
