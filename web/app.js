@@ -10,6 +10,7 @@ import { hooks, loadSample, openFiles, openZip, openRecording, isRecording, entr
 import { goTo, play, updatePlayButton, SPEEDS } from './playback.js';
 import { bindPanels, setParamInputs, setHsvInputs, renderRects, addRect, pickAt, setMode } from './panels.js';
 import { resultJson, dloJson, download } from './export.js';
+import { pageStats } from './plot.js';
 
 hooks.opened = async () => {
   const info = state.seq.info;
@@ -141,6 +142,8 @@ async function start() {
 
 // Hooks for the browser tests and for scripting the page.
 window.upetrack = {
+  // { fps, decode_ms, track_ms, total_ms, frames }: medians over the last 60 frames.
+  get stats() { return pageStats(); },
   state,
   goTo,
   resultJson,

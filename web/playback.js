@@ -6,12 +6,11 @@ import { call } from './worker-client.js';
 import { Request } from './protocol.js';
 import { requestFrame } from './sequence.js';
 import { draw } from './draw.js';
-import { updateLabels, drawPlot } from './plot.js';
+import { updateLabels, drawPlot, STATS_WINDOW } from './plot.js';
 import { projectPoints } from './core.js';
 
 // Playback speeds offered (the page's select), times the sequence's fps.
 export const SPEEDS = [0.25, 0.5, 1, 2, 4];
-const FPS_WINDOW = 30;
 
 export function updatePlayButton() { $('play').textContent = state.playing ? 'Pause' : 'Play'; }
 
@@ -19,7 +18,7 @@ export function updatePlayButton() { $('play').textContent = state.playing ? 'Pa
 export function render() {
   draw();
   state.shownAt.push(performance.now());
-  if (state.shownAt.length > FPS_WINDOW) state.shownAt.shift();
+  if (state.shownAt.length > STATS_WINDOW) state.shownAt.shift();
   updateLabels();
   drawPlot();
 }

@@ -7,14 +7,33 @@ import { errorStats } from './core.js';
 const stats = (xs) => errorStats(new Float64Array(xs));
 const fixed = (x, d) => (Number.isFinite(x) ? x.toFixed(d) : '-');
 
+// Frames the page's statistics look back over.
+export const STATS_WINDOW = 60;
+
+// `window.upetrack.stats`: medians over the last STATS_WINDOW frames up to
+// the one shown. `fps` is the display rate (from the median interval between
+// frames drawn), the times are the worker's for each frame.
+export function pageStats() {
+  const ts = state.shownAt;
+  const intervals = ts.slice(1).map((t, k) => t - ts[k]);
+  const recent = state.results.slice(Math.max(0, state.index - STATS_WINDOW + 1), state.index + 1).filter(Boolean);
+  const median = (xs) => (xs.length ? stats(xs).median : NaN);
+  return {
+    fps: intervals.length ? 1000 / median(intervals) : NaN,
+    decode_ms: median(recent.map((r) => r.decodeMs)),
+    track_ms: median(recent.map((r) => r.trackMs)),
+    total_ms: median(recent.map((r) => r.totalMs)),
+    frames: recent.length,
+  };
+}
+
 export function updateLabels() {
   const n = state.seq.info.color_files.length;
   $('timeline').value = String(state.index);
   $('frame-label').textContent = `${state.index + 1} / ${n}`;
   const r = state.results[state.index];
   const tracked = state.results.slice(0, state.tracked + 1).filter(Boolean);
-  const ts = state.shownAt;
-  const fps = ts.length > 1 ? (1000 * (ts.length - 1)) / (ts[ts.length - 1] - ts[0]) : NaN;
+  const fps = pageStats().fps;
   const lines = [
     `sequence ${state.seq.name}   frame ${state.index}   status ${r ? r.status : '-'}${r && r.reason ? ` (${r.reason})` : ''}`,
     r ? `tracking ${r.trackMs.toFixed(2)} ms   segmentation+cloud+tracking ${r.totalMs.toFixed(2)} ms   decoding ${r.decodeMs.toFixed(1)} ms   median tracking ${fixed(stats(tracked.map((x) => x.trackMs)).median, 2)} ms` : '',

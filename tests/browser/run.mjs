@@ -190,8 +190,13 @@ await test('playback with decoding and tracking: same nodes as native; rate prin
     const ms = (performance.now() - t0) / (n - 1);
     const res = u.state.results.slice(1);
     const med = (xs) => [...xs].sort((a, b) => a - b)[xs.length >> 1];
-    return { perFrame: ms, decode: med(res.map((x) => x.decodeMs)), total: med(res.map((x) => x.totalMs)), track: med(res.map((x) => x.trackMs)), result: u.resultJson() };
+    return { perFrame: ms, decode: med(res.map((x) => x.decodeMs)), total: med(res.map((x) => x.totalMs)), track: med(res.map((x) => x.trackMs)), result: u.resultJson(), stats: u.stats };
   });
+  // window.upetrack.stats: medians of the frames shown, and a display rate near the measured one.
+  const st = r.stats;
+  assert(st.frames === 25 && [st.fps, st.decode_ms, st.track_ms, st.total_ms].every(Number.isFinite), `stats not filled: ${JSON.stringify(st)}`);
+  assert(st.track_ms > 0 && st.track_ms <= st.total_ms, `stats times inconsistent: ${JSON.stringify(st)}`);
+  assert(st.fps > 0.5 * (1000 / r.perFrame) && st.fps < 2 * (1000 / r.perFrame), `stats fps ${st.fps} against measured ${1000 / r.perFrame}`);
   console.log(`     benchmark: playback at full speed ${r.perFrame.toFixed(1)} ms per frame (${(1000 / r.perFrame).toFixed(0)} frames/s) including file reads, decoding, tracking and drawing; median decode ${r.decode.toFixed(1)} ms, total ${r.total.toFixed(2)} ms, tracking ${r.track.toFixed(2)} ms`);
   const ref = JSON.parse(fs.readFileSync(nativeJson, 'utf8'));
   let worst = 0;
