@@ -75,17 +75,24 @@ impl Intrinsics {
                 x = dx;
                 y = dy;
             }
-            Distortion::BrownConrady => {
-                let r2 = x * x + y * y;
-                let f = 1.0 + k1 * r2 + k2 * r2 * r2 + k3 * r2 * r2 * r2;
-                let dx = x * f + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
-                let dy = y * f + 2.0 * p2 * x * y + p1 * (r2 + 2.0 * y * y);
-                x = dx;
-                y = dy;
-            }
+            Distortion::BrownConrady => [x, y] = self.brown_conrady(x, y),
             Distortion::None | Distortion::InverseBrownConrady => {}
         }
         [x * self.fx + self.ppx, y * self.fy + self.ppy]
+    }
+
+    /// The Brown-Conrady polynomial at `(x, y)`: radial factor and tangential
+    /// terms. Projection applies it for `BrownConrady`, deprojection for
+    /// `InverseBrownConrady` (librealsense's convention).
+    #[inline]
+    fn brown_conrady(&self, x: f32, y: f32) -> [f32; 2] {
+        let [k1, k2, p1, p2, k3] = self.coeffs;
+        let r2 = x * x + y * y;
+        let f = 1.0 + k1 * r2 + k2 * r2 * r2 + k3 * r2 * r2 * r2;
+        [
+            x * f + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x),
+            y * f + 2.0 * p2 * x * y + p1 * (r2 + 2.0 * y * y),
+        ]
     }
 
     /// Point at `depth` metres behind pixel `px`, as `rs2_deproject_pixel_to_point`.
@@ -94,14 +101,7 @@ impl Intrinsics {
         let mut y = (px[1] - self.ppy) / self.fy;
         let [k1, k2, p1, p2, k3] = self.coeffs;
         match self.model {
-            Distortion::InverseBrownConrady => {
-                let r2 = x * x + y * y;
-                let f = 1.0 + k1 * r2 + k2 * r2 * r2 + k3 * r2 * r2 * r2;
-                let ux = x * f + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
-                let uy = y * f + 2.0 * p2 * x * y + p1 * (r2 + 2.0 * y * y);
-                x = ux;
-                y = uy;
-            }
+            Distortion::InverseBrownConrady => [x, y] = self.brown_conrady(x, y),
             Distortion::BrownConrady => {
                 // Fixed-point undistortion; ten steps, as librealsense takes.
                 let (xd, yd) = (x, y);
@@ -336,26 +336,20 @@ impl Aligner {
     ) -> Self {
         let sse = arithmetic == AlignArithmetic::X86Sse;
         let span = !sse || fills_span(&depth_intr, &color_intr);
+        // The SSE aligner undistorts inverse Brown-Conrady only: a
+        // Brown-Conrady depth camera's ray is then taken as undistorted.
+        let ray_camera = if sse && depth_intr.model == Distortion::BrownConrady {
+            Intrinsics {
+                model: Distortion::None,
+                ..depth_intr
+            }
+        } else {
+            depth_intr
+        };
+        // rs2_deproject_pixel_to_point at depth 1: the x and y it multiplies by the depth.
         let ray = |px: f32, py: f32| -> [f32; 2] {
-            if !sse {
-                // rs2_deproject_pixel_to_point at depth 1: its x and y are
-                // what it multiplies by the depth.
-                let p = depth_intr.deproject([px, py], 1.0);
-                return [p[0], p[1]];
-            }
-            // The SSE aligner's ray: `(x - ppx) / fx`, undistorted for inverse Brown-Conrady only.
-            let mut x = (px - depth_intr.ppx) / depth_intr.fx;
-            let mut y = (py - depth_intr.ppy) / depth_intr.fy;
-            if depth_intr.model == Distortion::InverseBrownConrady {
-                let [k1, k2, p1, p2, k3] = depth_intr.coeffs;
-                let r2 = x * x + y * y;
-                let f = 1.0 + k1 * r2 + k2 * r2 * r2 + k3 * r2 * r2 * r2;
-                let ux = x * f + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
-                let uy = y * f + 2.0 * p2 * x * y + p1 * (r2 + 2.0 * y * y);
-                x = ux;
-                y = uy;
-            }
-            [x, y]
+            let p = ray_camera.deproject([px, py], 1.0);
+            [p[0], p[1]]
         };
         let (w, h) = (depth_intr.width as usize, depth_intr.height as usize);
         let r = depth_to_color.rotation;

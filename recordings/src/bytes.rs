@@ -153,6 +153,12 @@ impl<'a> Cursor<'a> {
         Ok(self.take(1, what)?[0])
     }
 
+    /// A little-endian `u16`.
+    pub fn u16(&mut self, what: &str) -> Result<u16, RecordingError> {
+        let b = self.take(2, what)?;
+        Ok(u16::from_le_bytes([b[0], b[1]]))
+    }
+
     /// A little-endian `u32`.
     pub fn u32(&mut self, what: &str) -> Result<u32, RecordingError> {
         let b = self.take(4, what)?;

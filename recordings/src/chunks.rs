@@ -19,7 +19,7 @@ pub const CHUNK_CACHE_BYTES: usize = 192 << 20;
 pub fn decompress(
     compression: &str,
     size: u64,
-    data: Vec<u8>,
+    data: &[u8],
     offset: u64,
 ) -> Result<Vec<u8>, RecordingError> {
     if size > MAX_CHUNK_BYTES {
@@ -37,16 +37,16 @@ pub fn decompress(
     let corrupt =
         |e: std::io::Error| RecordingError::corrupt(offset, format!("{compression} chunk: {e}"));
     match compression {
-        "none" | "" => return check_size(data, size, offset),
-        "lz4" => lz4_flex::frame::FrameDecoder::new(data.as_slice())
+        "none" | "" => return check_size(data.to_vec(), size, offset),
+        "lz4" => lz4_flex::frame::FrameDecoder::new(data)
             .take(limit)
             .read_to_end(&mut out)
             .map_err(corrupt)?,
-        "bz2" => bzip2::read::BzDecoder::new(data.as_slice())
+        "bz2" => bzip2::read::BzDecoder::new(data)
             .take(limit)
             .read_to_end(&mut out)
             .map_err(corrupt)?,
-        "zstd" => ruzstd::decoding::StreamingDecoder::new(data.as_slice())
+        "zstd" => ruzstd::decoding::StreamingDecoder::new(data)
             .map_err(|e| RecordingError::corrupt(offset, format!("zstd chunk: {e}")))?
             .take(limit)
             .read_to_end(&mut out)
@@ -115,16 +115,16 @@ mod tests {
     #[test]
     fn declared_size_is_checked_before_and_after() {
         assert!(matches!(
-            decompress("lz4", MAX_CHUNK_BYTES + 1, vec![0; 8], 5),
+            decompress("lz4", MAX_CHUNK_BYTES + 1, &[0; 8], 5),
             Err(RecordingError::TooLarge { .. })
         ));
-        assert!(decompress("none", 3, vec![1, 2, 3], 0).is_ok());
+        assert!(decompress("none", 3, &[1, 2, 3], 0).is_ok());
         assert!(matches!(
-            decompress("", 4, vec![1, 2, 3], 0),
+            decompress("", 4, &[1, 2, 3], 0),
             Err(RecordingError::Corrupt { .. })
         ));
         assert!(matches!(
-            decompress("brotli", 3, vec![1, 2, 3], 0),
+            decompress("brotli", 3, &[1, 2, 3], 0),
             Err(RecordingError::UnsupportedCompression { .. })
         ));
     }

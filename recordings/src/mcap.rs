@@ -81,21 +81,13 @@ pub struct Mcap<R: ByteSource> {
     pub warnings: Vec<String>,
 }
 
-fn string(c: &mut Cursor<'_>, what: &str) -> Result<String, RecordingError> {
-    c.string(what)
-}
-
 /// A record at `pos` of the file: opcode and body (read whole, capped).
 fn read_record<R: ByteSource>(
     src: &mut R,
     pos: u64,
     cap: u64,
 ) -> Result<(u8, Vec<u8>, u64), RecordingError> {
-    let mut head = [0u8; 9];
-    src.read_at(pos, &mut head)?;
-    let len = u64::from_le_bytes([
-        head[1], head[2], head[3], head[4], head[5], head[6], head[7], head[8],
-    ]);
+    let (op, len, body_at) = record_head(src, pos)?;
     if len > cap {
         return Err(RecordingError::TooLarge {
             what: "MCAP record in bytes",
@@ -103,10 +95,29 @@ fn read_record<R: ByteSource>(
             max: cap,
         });
     }
-    crate::bytes::check_range(src.len(), pos + 9, len as usize)?;
+    crate::bytes::check_range(src.len(), body_at, len as usize)?;
     let mut body = vec![0u8; len as usize];
-    src.read_at(pos + 9, &mut body)?;
-    Ok((head[0], body, pos + 9 + len))
+    src.read_at(body_at, &mut body)?;
+    Ok((op, body, body_at + len))
+}
+
+/// Channel id and log time of a message record's body (channel u16,
+/// sequence u32, log time u64, ...); `None` when it is too short.
+fn message_head(body: &[u8]) -> Option<(u16, u64)> {
+    let b = body.get(..14)?;
+    let time = u64::from_le_bytes([b[6], b[7], b[8], b[9], b[10], b[11], b[12], b[13]]);
+    Some((u16::from_le_bytes([b[0], b[1]]), time))
+}
+
+/// The data of message record body `body`, checked to be `channel`'s.
+fn message_data(body: &[u8], channel: u16, at: u64) -> Result<&[u8], RecordingError> {
+    match (message_head(body), body.get(22..)) {
+        (Some((c, _)), Some(data)) if c == channel => Ok(data),
+        _ => Err(RecordingError::corrupt(
+            at,
+            "message of another channel or too short",
+        )),
+    }
 }
 
 /// The opcode and length of the record at `pos`, and where its body starts.
@@ -149,7 +160,7 @@ fn chunk_parts(body: &[u8], at: u64) -> Result<(String, u64, &[u8]), RecordingEr
     let _end = c.u64("chunk end time")?;
     let size = c.u64("chunk uncompressed size")?;
     let _crc = c.u32("chunk crc")?;
-    let compression = string(&mut c, "chunk compression")?;
+    let compression = c.string("chunk compression")?;
     let len = c.u64("chunk records length")?;
     let data = c.take(usize::try_from(len).unwrap_or(usize::MAX), "chunk records")?;
     Ok((compression, size, data))
@@ -238,14 +249,14 @@ impl<R: ByteSource> Mcap<R> {
         let mut c = Cursor::new(body, at);
         match op {
             OP_SCHEMA => {
-                let id = u16::from_le_bytes([c.u8("schema id")?, c.u8("schema id")?]);
-                schemas.insert(id, string(&mut c, "schema name")?);
+                let id = c.u16("schema id")?;
+                schemas.insert(id, c.string("schema name")?);
             }
             OP_CHANNEL => {
-                let id = u16::from_le_bytes([c.u8("channel id")?, c.u8("channel id")?]);
-                let schema = u16::from_le_bytes([c.u8("channel schema")?, c.u8("channel schema")?]);
-                let topic = string(&mut c, "channel topic")?;
-                let encoding = string(&mut c, "channel encoding")?;
+                let id = c.u16("channel id")?;
+                let schema = c.u16("channel schema")?;
+                let topic = c.string("channel topic")?;
+                let encoding = c.string("channel encoding")?;
                 if !pending.iter().any(|p| p.0 == id) {
                     pending.push((id, schema, topic, encoding));
                 }
@@ -293,7 +304,7 @@ impl<R: ByteSource> Mcap<R> {
                 let map_len = c.u32("message index offsets")? as usize;
                 c.take(map_len, "message index offsets")?;
                 let index_len = c.u64("message index length")?;
-                let plain = string(&mut c, "chunk compression")?.is_empty();
+                let plain = c.string("chunk compression")?.is_empty();
                 chunk_indexes.push((chunk_at, chunk_len, index_len, plain));
             }
             pos = next;
@@ -324,7 +335,7 @@ impl<R: ByteSource> Mcap<R> {
                     continue;
                 }
                 let mut c = Cursor::new(body, at + off + 9);
-                let channel = u16::from_le_bytes([c.u8("index channel")?, c.u8("index channel")?]);
+                let channel = c.u16("index channel")?;
                 let n = c.u32("index entries")? as usize;
                 if n % 16 != 0 {
                     return Err(RecordingError::corrupt(
@@ -380,11 +391,8 @@ impl<R: ByteSource> Mcap<R> {
                     OP_MESSAGE => {
                         let mut head = [0u8; 14];
                         self.src.read_at(body_at, &mut head)?;
-                        let channel = u16::from_le_bytes([head[0], head[1]]);
-                        let time_ns = u64::from_le_bytes([
-                            head[6], head[7], head[8], head[9], head[10], head[11], head[12],
-                            head[13],
-                        ]);
+                        let (channel, time_ns) = message_head(&head)
+                            .ok_or_else(|| RecordingError::corrupt(pos, "message too short"))?;
                         self.add(MessageRef {
                             channel,
                             time_ns,
@@ -395,17 +403,13 @@ impl<R: ByteSource> Mcap<R> {
                     OP_CHUNK => {
                         let (_, body, _) = read_record(&mut self.src, pos, MAX_CHUNK_BYTES)?;
                         let (compression, size, data) = chunk_parts(&body, body_at)?;
-                        let inner = decompress(&compression, size, data.to_vec(), pos)?;
+                        let inner = decompress(&compression, size, data, pos)?;
                         let chunk = self.chunks.len() as u32;
                         let mut found = Vec::new();
                         for r in records(&inner, 0) {
                             let (off, op, b) = r?;
                             Self::meta(op, b, pos, schemas, pending)?;
-                            if op == OP_MESSAGE && b.len() >= 14 {
-                                let channel = u16::from_le_bytes([b[0], b[1]]);
-                                let time_ns = u64::from_le_bytes([
-                                    b[6], b[7], b[8], b[9], b[10], b[11], b[12], b[13],
-                                ]);
+                            if let (OP_MESSAGE, Some((channel, time_ns))) = (op, message_head(b)) {
                                 found.push(MessageRef {
                                     channel,
                                     time_ns,
@@ -452,7 +456,7 @@ impl<R: ByteSource> Mcap<R> {
         self.src.read_at(body_at, &mut body)?;
         let mut c = Cursor::new(&body, body_at);
         c.take(28, "chunk header")?;
-        if !string(&mut c, "chunk compression")?.is_empty() {
+        if !c.string("chunk compression")?.is_empty() {
             return Ok(());
         }
         c.u64("chunk records length")?;
@@ -462,10 +466,7 @@ impl<R: ByteSource> Mcap<R> {
         for r in records(&body[start..], records_at) {
             let Ok((off, op, b)) = r else { break };
             Self::meta(op, b, records_at + off, schemas, pending)?;
-            if op == OP_MESSAGE && b.len() >= 14 {
-                let channel = u16::from_le_bytes([b[0], b[1]]);
-                let time_ns =
-                    u64::from_le_bytes([b[6], b[7], b[8], b[9], b[10], b[11], b[12], b[13]]);
+            if let (OP_MESSAGE, Some((channel, time_ns))) = (op, message_head(b)) {
                 found.push(MessageRef {
                     channel,
                     time_ns,
@@ -482,56 +483,51 @@ impl<R: ByteSource> Mcap<R> {
 
     /// The message data of `m` (without the record's channel, sequence and times).
     pub fn read(&mut self, m: &MessageRef) -> Result<Vec<u8>, RecordingError> {
-        let body: Vec<u8> = if m.chunk == u32::MAX {
-            let (op, body, _) = read_record(&mut self.src, m.offset, MAX_CHUNK_BYTES)?;
+        if m.chunk == u32::MAX {
+            let (op, mut body, _) = read_record(&mut self.src, m.offset, MAX_CHUNK_BYTES)?;
             if op != OP_MESSAGE {
                 return Err(RecordingError::corrupt(
                     m.offset,
                     "index does not point at a message",
                 ));
             }
-            body
-        } else {
-            let place = *self
-                .chunks
-                .get(m.chunk as usize)
-                .ok_or_else(|| RecordingError::corrupt(0, "message in an unknown chunk"))?;
-            let chunk = match self.cache.get(m.chunk) {
-                Some(c) => c,
-                None => {
-                    let (op, body, _) = read_record(&mut self.src, place.pos, MAX_CHUNK_BYTES)?;
-                    if op != OP_CHUNK {
-                        return Err(RecordingError::corrupt(
-                            place.pos,
-                            "chunk index does not point at a chunk",
-                        ));
-                    }
-                    let (compression, size, data) = chunk_parts(&body, place.pos + 9)?;
-                    let data = decompress(&compression, size, data.to_vec(), place.pos)?;
-                    self.cache.insert(m.chunk, data)
+            // Checked, then the record's own buffer handed on without a copy.
+            message_data(&body, m.channel, m.offset)?;
+            body.drain(..22);
+            return Ok(body);
+        }
+        let place = *self
+            .chunks
+            .get(m.chunk as usize)
+            .ok_or_else(|| RecordingError::corrupt(0, "message in an unknown chunk"))?;
+        let chunk = match self.cache.get(m.chunk) {
+            Some(c) => c,
+            None => {
+                let (op, body, _) = read_record(&mut self.src, place.pos, MAX_CHUNK_BYTES)?;
+                if op != OP_CHUNK {
+                    return Err(RecordingError::corrupt(
+                        place.pos,
+                        "chunk index does not point at a chunk",
+                    ));
                 }
-            };
-            let start = usize::try_from(m.offset).unwrap_or(usize::MAX);
-            let tail = chunk
-                .get(start..)
-                .ok_or_else(|| RecordingError::corrupt(place.pos, "index points past its chunk"))?;
-            let (_, op, body) = records(tail, 0).next().ok_or_else(|| {
-                RecordingError::corrupt(place.pos, "index points past its chunk")
-            })??;
-            if op != OP_MESSAGE {
-                return Err(RecordingError::corrupt(
-                    place.pos,
-                    "index does not point at a message",
-                ));
+                let (compression, size, data) = chunk_parts(&body, place.pos + 9)?;
+                let data = decompress(&compression, size, data, place.pos)?;
+                self.cache.insert(m.chunk, data)
             }
-            body.to_vec()
         };
-        if body.len() < 22 || u16::from_le_bytes([body[0], body[1]]) != m.channel {
+        let start = usize::try_from(m.offset).unwrap_or(usize::MAX);
+        let tail = chunk
+            .get(start..)
+            .ok_or_else(|| RecordingError::corrupt(place.pos, "index points past its chunk"))?;
+        let (_, op, body) = records(tail, 0)
+            .next()
+            .ok_or_else(|| RecordingError::corrupt(place.pos, "index points past its chunk"))??;
+        if op != OP_MESSAGE {
             return Err(RecordingError::corrupt(
-                m.offset,
-                "message of another channel or too short",
+                place.pos,
+                "index does not point at a message",
             ));
         }
-        Ok(body[22..].to_vec())
+        Ok(message_data(body, m.channel, m.offset)?.to_vec())
     }
 }

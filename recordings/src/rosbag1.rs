@@ -210,8 +210,17 @@ fn connection_from(rec_header: &[u8], data: &[u8], at: u64) -> Result<Connection
 }
 
 /// Reads and decompresses the chunk whose record starts at `pos`.
-fn load_chunk<R: ByteSource>(src: &mut R, pos: u64) -> Result<(Vec<u8>, Record), RecordingError> {
+fn load_chunk<R: ByteSource>(src: &mut R, pos: u64) -> Result<Vec<u8>, RecordingError> {
     let rec = read_record(src, pos)?;
+    chunk_data(src, &rec, pos)
+}
+
+/// The uncompressed data of chunk record `rec` (at `pos`), its header already read.
+fn chunk_data<R: ByteSource>(
+    src: &mut R,
+    rec: &Record,
+    pos: u64,
+) -> Result<Vec<u8>, RecordingError> {
     let f = fields(&rec.header, rec.header_pos)?;
     if op(&f, pos)? != OP_CHUNK {
         return Err(RecordingError::corrupt(pos, "expected a chunk record"));
@@ -225,8 +234,8 @@ fn load_chunk<R: ByteSource>(src: &mut R, pos: u64) -> Result<(Vec<u8>, Record),
             max: u64::from(MAX_CHUNK_DATA_BYTES),
         });
     }
-    let data = read_data(src, &rec)?;
-    Ok((decompress(&compression, u64::from(size), data, pos)?, rec))
+    let data = read_data(src, rec)?;
+    decompress(&compression, u64::from(size), &data, pos)
 }
 
 /// The records inside a chunk's uncompressed data, as (offset, header, data).
@@ -316,6 +325,13 @@ impl<R: ByteSource> Bag<R> {
         Ok(())
     }
 
+    /// Reads the data of connection record `rec` (at `pos`) and adds the connection.
+    fn add_connection_record(&mut self, rec: &Record, pos: u64) -> Result<(), RecordingError> {
+        let data = read_data(&mut self.src, rec)?;
+        let c = connection_from(&rec.header, &data, pos)?;
+        self.add_connection(c)
+    }
+
     fn add_message(&mut self, m: MessageRef) -> Result<(), RecordingError> {
         if self.messages.len() >= MAX_MESSAGES {
             return Err(RecordingError::TooLarge {
@@ -337,11 +353,7 @@ impl<R: ByteSource> Bag<R> {
             let rec = read_record(&mut self.src, pos)?;
             let f = fields(&rec.header, rec.header_pos)?;
             match op(&f, pos)? {
-                OP_CONNECTION => {
-                    let data = read_data(&mut self.src, &rec)?;
-                    let c = connection_from(&rec.header, &data, pos)?;
-                    self.add_connection(c)?;
-                }
+                OP_CONNECTION => self.add_connection_record(&rec, pos)?,
                 OP_CHUNK_INFO => {
                     let chunk_pos = field_u64(&f, "chunk_pos", pos)?;
                     let count = field_u32(&f, "count", pos)?;
@@ -420,46 +432,41 @@ impl<R: ByteSource> Bag<R> {
         let rec = read_record(&mut self.src, pos)?;
         let f = fields(&rec.header, rec.header_pos)?;
         match op(&f, pos)? {
-            OP_CONNECTION => {
-                let data = read_data(&mut self.src, &rec)?;
-                let c = connection_from(&rec.header, &data, pos)?;
-                self.add_connection(c)?;
-            }
+            OP_CONNECTION => self.add_connection_record(&rec, pos)?,
             OP_CHUNK => {
-                let (chunk, _) = load_chunk(&mut self.src, pos)?;
+                let chunk = chunk_data(&mut self.src, &rec, pos)?;
                 let chunk_index = self.chunks.len() as u32;
-                let mut found = Vec::new();
+                let (mut connections, mut messages) = (Vec::new(), Vec::new());
                 for r in chunk_records(&chunk, 0) {
                     let (offset, header, data) = r?;
                     let at = pos + u64::from(offset);
                     let f = fields(header, at)?;
                     match op(&f, at)? {
-                        OP_CONNECTION => found.push(Err(connection_from(header, data, at)?)),
+                        OP_CONNECTION => connections.push(connection_from(header, data, at)?),
                         OP_MESSAGE => {
                             let conn = field_u32(&f, "conn", at)?;
                             let time =
                                 ros_time_ns(&mut Cursor::new(field(&f, "time", at)?, at), "time")?;
-                            found.push(Ok(MessageRef {
+                            messages.push(MessageRef {
                                 conn,
                                 time_ns: time,
                                 chunk: chunk_index,
                                 offset,
-                            }));
+                            });
                         }
                         _ => {}
                     }
                 }
-                // Only a chunk read whole counts: its messages are added together.
-                let rec = read_record(&mut self.src, pos)?;
+                // Only a chunk read whole counts: its records are added together.
                 self.chunks.push(ChunkPlace {
                     pos,
                     plain_data: plain_data(&rec)?,
                 });
-                for item in found {
-                    match item {
-                        Ok(m) => self.add_message(m)?,
-                        Err(c) => self.add_connection(c)?,
-                    }
+                for c in connections {
+                    self.add_connection(c)?;
+                }
+                for m in messages {
+                    self.add_message(m)?;
                 }
             }
             _ => {}
@@ -495,7 +502,7 @@ impl<R: ByteSource> Bag<R> {
         let chunk = match self.cache.get(m.chunk) {
             Some(c) => c,
             None => {
-                let (data, _) = load_chunk(&mut self.src, place.pos)?;
+                let data = load_chunk(&mut self.src, place.pos)?;
                 self.cache.insert(m.chunk, data)
             }
         };

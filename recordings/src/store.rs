@@ -2,6 +2,8 @@
 //! SQLite database or an MCAP file, seen as one list of topics and one
 //! time-ordered list of messages, each read on demand.
 
+use std::collections::BTreeMap;
+
 use crate::bytes::ByteSource;
 use crate::error::RecordingError;
 use crate::mcap::{self, Mcap};
@@ -70,6 +72,19 @@ fn topic_index(topics: &mut Vec<Topic>, name: &str, msg_type: &str) -> usize {
     topics.len() - 1
 }
 
+/// A container's messages as [`Msg`]s: `ids` maps the container's topic id to
+/// the topic's index in [`Store::topics`]; a message of an unknown id is left out.
+fn listed<K: Ord>(ids: &BTreeMap<K, usize>, msgs: impl Iterator<Item = (K, u64, At)>) -> Vec<Msg> {
+    msgs.filter_map(|(k, time_ns, at)| {
+        Some(Msg {
+            topic: *ids.get(&k)?,
+            time_ns,
+            at,
+        })
+    })
+    .collect()
+}
+
 impl<R: ByteSource> Store<R> {
     /// Opens a ROS1 bag, a rosbag2 `.db3` or an `.mcap`, told apart by their first bytes.
     pub fn open(mut src: R) -> Result<Self, RecordingError> {
@@ -100,23 +115,17 @@ impl<R: ByteSource> Store<R> {
                 }
                 wire = Some(w);
             }
-            let ids: Vec<(u16, usize)> = m
+            let ids: BTreeMap<u16, usize> = m
                 .channels
                 .iter()
                 .map(|(id, c)| (*id, topic_index(&mut topics, &c.topic, &c.schema)))
                 .collect();
-            let messages = m
-                .messages
-                .iter()
-                .filter_map(|r| {
-                    let topic = ids.iter().find(|(id, _)| *id == r.channel)?.1;
-                    Some(Msg {
-                        topic,
-                        time_ns: r.time_ns,
-                        at: At::Mcap(*r),
-                    })
-                })
-                .collect();
+            let messages = listed(
+                &ids,
+                m.messages
+                    .iter()
+                    .map(|r| (r.channel, r.time_ns, At::Mcap(*r))),
+            );
             return Ok(Self {
                 inner: Inner::Mcap(m),
                 topics,
@@ -134,23 +143,15 @@ impl<R: ByteSource> Store<R> {
                     ),
                 });
             }
-            let ids: Vec<(i64, usize)> = db
+            let ids: BTreeMap<i64, usize> = db
                 .topics
                 .iter()
                 .map(|t| (t.id, topic_index(&mut topics, &t.name, &t.msg_type)))
                 .collect();
-            let messages = db
-                .messages
-                .iter()
-                .filter_map(|m| {
-                    let topic = ids.iter().find(|(id, _)| *id == m.topic)?.1;
-                    Some(Msg {
-                        topic,
-                        time_ns: m.time_ns,
-                        at: At::Db(*m),
-                    })
-                })
-                .collect();
+            let messages = listed(
+                &ids,
+                db.messages.iter().map(|m| (m.topic, m.time_ns, At::Db(*m))),
+            );
             return Ok(Self {
                 inner: Inner::Db(db),
                 topics,
@@ -159,23 +160,17 @@ impl<R: ByteSource> Store<R> {
             });
         }
         let bag = Bag::open(src)?;
-        let ids: Vec<(u32, usize)> = bag
+        let ids: BTreeMap<u32, usize> = bag
             .connections
             .values()
             .map(|c| (c.id, topic_index(&mut topics, &c.topic, &c.msg_type)))
             .collect();
-        let messages = bag
-            .messages
-            .iter()
-            .filter_map(|m| {
-                let topic = ids.iter().find(|(id, _)| *id == m.conn)?.1;
-                Some(Msg {
-                    topic,
-                    time_ns: m.time_ns,
-                    at: At::Bag(*m),
-                })
-            })
-            .collect();
+        let messages = listed(
+            &ids,
+            bag.messages
+                .iter()
+                .map(|m| (m.conn, m.time_ns, At::Bag(*m))),
+        );
         Ok(Self {
             inner: Inner::Bag(bag),
             topics,
