@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
-# Builds the WebAssembly package into web/pkg and the sample index; installs
-# the wasm target and wasm-bindgen-cli (the exact version in Cargo.lock) if missing.
+# Builds the WebAssembly package (an npm package: web/pkg/package.json) with
+# wasm-pack, and the sample index; installs the wasm target, wasm-bindgen-cli
+# (the exact version in Cargo.lock) and wasm-pack if missing.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+WASM_PACK_VERSION=0.15.1
 
 rustup target list --installed | grep -qx wasm32-unknown-unknown || rustup target add wasm32-unknown-unknown
 want=$(awk '/^name = "wasm-bindgen"$/ {getline; gsub(/"/, "", $3); print $3; exit}' Cargo.lock)
@@ -11,8 +13,13 @@ if [ "$have" != "$want" ]; then
   echo "installing wasm-bindgen-cli $want"
   cargo install wasm-bindgen-cli --version "=$want" --locked || cargo install wasm-bindgen-cli --version "=$want"
 fi
-cargo build -p upetrack-wasm --target wasm32-unknown-unknown --release
-wasm-bindgen --target web --no-typescript --out-dir web/pkg target/wasm32-unknown-unknown/release/upetrack_wasm.wasm
+# wasm-pack, pinned; offline: the wasm-bindgen above (--mode no-install), no
+# wasm-opt download (--no-opt; wasm-opt runs below when a good one is here).
+if [ "$(wasm-pack --version 2>/dev/null | awk '{print $2}')" != "$WASM_PACK_VERSION" ]; then
+  echo "installing wasm-pack $WASM_PACK_VERSION"
+  cargo install wasm-pack --version "=$WASM_PACK_VERSION" --locked
+fi
+wasm-pack --quiet build wasm --target web --release --mode no-install --no-opt --no-typescript --out-dir ../web/pkg
 if command -v wasm-opt >/dev/null 2>&1 && wasm-opt --version 2>/dev/null | grep -q 'version 1[1-9][0-9]'; then
   wasm-opt -O2 web/pkg/upetrack_wasm_bg.wasm -o web/pkg/upetrack_wasm_bg.wasm || true
 fi

@@ -97,6 +97,12 @@ if (query.get('embed') === '1') document.body.classList.add('embed');
 $('embed-snippet').textContent =
   `<iframe src="${new URL('index.html?sample=static-s&autoplay=1&embed=1', location.href)}" width="680" height="600" style="border:0"></iframe>`;
 
+// Who decodes colour files: WebAssembly (the default: the command's decoder,
+// bit for bit, and the fastest on the machines measured, docs/testing.md),
+// the browser (ImageDecoder, or createImageBitmap where there is none), or
+// createImageBitmap always ('canvas').
+const DECODERS = ['browser', 'canvas', 'wasm'];
+
 // `speed=` must be one of the offered speeds; anything else is refused.
 function applySpeed(text) {
   const v = Number(text);
@@ -112,6 +118,10 @@ async function start() {
     if (!k.startsWith('p.')) continue;
     if (typeof params[k.slice(2)] === 'number' && v.trim() !== '' && Number.isFinite(Number(v))) params[k.slice(2)] = Number(v);
     else problems.push(`${k}=${v} is not a numeric parameter`);
+  }
+  if (query.has('decode')) {
+    if (DECODERS.includes(query.get('decode'))) state.decoder = query.get('decode');
+    else problems.push(`decode=${query.get('decode')} is not one of ${DECODERS.join(', ')}`);
   }
   if (query.get('algorithm') in ALGORITHM_NAMES) params.algorithm = query.get('algorithm');
   if (query.get('compare') in ALGORITHM_NAMES) state.compare = query.get('compare');

@@ -1,7 +1,7 @@
 // The side panels and the mouse on the image: the algorithm choice, the
 // parameters, the HSV range (typed or picked by clicking the rope) and the
 // drawn occlusion rectangles. Every value is checked by the core before use.
-import { state, $, guarded } from './state.js';
+import { state, $, guarded, settleLookahead } from './state.js';
 import { call } from './worker-client.js';
 import { Request } from './protocol.js';
 import { canvas, draw, drawDragged } from './draw.js';
@@ -108,10 +108,10 @@ export function bindPanels() {
     state.epoch++;
     const seq = state.seq;
     state.busy = state.busy.then(async () => {
+      await settleLookahead();
       await call(Request.open(seq.info.camera, state.params, state.hsv, state.compare));
       state.results = [];
       state.tracked = -1;
-      state.lookahead = null;
     });
     await state.busy;
     await goTo(state.index);

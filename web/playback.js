@@ -1,13 +1,16 @@
 // Moving through a sequence: frames are tracked in order, each result keeps
-// the tracker's snapshot, and while playing the next frame is requested
+// the tracker's snapshot, and while playing the next frames are requested
 // before the current one is drawn (the worker works while the page draws).
-import { state, $, showError, progress } from './state.js';
+import { state, $, showError, progress, settleLookahead } from './state.js';
 import { call } from './worker-client.js';
 import { Request } from './protocol.js';
 import { requestFrame } from './sequence.js';
 import { draw } from './draw.js';
-import { updateLabels, drawPlot, STATS_WINDOW } from './plot.js';
+import { updateLabels, drawPlot, updateStatsPanel, STATS_WINDOW } from './plot.js';
 import { projectPoints } from './core.js';
+
+// Frames requested ahead of the shown one while playing.
+export const LOOKAHEAD = 2;
 
 // Playback speeds offered (the page's select), times the sequence's fps.
 export const SPEEDS = [0.25, 0.5, 1, 2, 4];
@@ -20,6 +23,7 @@ export function render() {
   state.shownAt.push(performance.now());
   if (state.shownAt.length > STATS_WINDOW) state.shownAt.shift();
   updateLabels();
+  updateStatsPanel();
   drawPlot();
 }
 
@@ -36,7 +40,8 @@ export function goTo(i) {
 function keep(r) {
   return {
     nodes: r.nodes, nodesPx: r.nodesPx, visible: r.visible, status: r.status, reason: r.reason,
-    trackMs: r.trackMs, totalMs: r.totalMs, decodeMs: r.decodeMs, error: r.error, snapshot: r.snapshot,
+    segmentMs: r.segmentMs, cloudMs: r.cloudMs, trackMs: r.trackMs, totalMs: r.totalMs, decodeMs: r.decodeMs,
+    error: r.error, snapshot: r.snapshot,
     second: r.second || null,
   };
 }
@@ -52,17 +57,22 @@ async function goToNow(i) {
   } else {
     const from = state.tracked + 1;
     for (let k = from; k <= i; k++) {
-      const look = state.lookahead;
-      state.lookahead = null;
+      const look = state.lookahead.shift();
       const usable = look && look.index === k && look.epoch === state.epoch && look.generation === generation;
+      if (!usable && look) await settleLookahead();
       r = await (usable ? look.promise : requestFrame(k, true));
       if (generation !== state.generation) return;
       state.results[k] = keep(r);
       state.tracked = k;
-      if (state.playing && k === i && k + 1 < n) {
-        const promise = requestFrame(k + 1, true);
-        promise.catch(() => {});
-        state.lookahead = { index: k + 1, epoch: state.epoch, generation, promise };
+      if (state.playing && k === i) {
+        // Keep LOOKAHEAD frames requested: the worker decodes the later
+        // ones while it tracks the earlier, and while this one is drawn.
+        let next = state.lookahead.length ? state.lookahead[state.lookahead.length - 1].index + 1 : k + 1;
+        for (; next < n && next <= k + LOOKAHEAD; next++) {
+          const promise = requestFrame(next, true);
+          promise.catch(() => {});
+          state.lookahead.push({ index: next, epoch: state.epoch, generation, promise });
+        }
       }
       if (k < i && (k - from) % 10 === 9) progress(k - from, i - from);
     }
@@ -100,11 +110,11 @@ export async function play() {
 export function invalidateAfterCurrent() {
   state.epoch++;
   const kept = Math.min(state.tracked, state.index - 1);
-  if (kept === state.tracked && !state.lookahead) return;
+  if (kept === state.tracked && !state.lookahead.length) return;
   state.results.length = kept + 1;
   state.tracked = kept;
   const snapshot = kept >= 0 ? state.results[kept].snapshot : null;
-  state.busy = state.busy.then(() => call(Request.restore(snapshot)));
+  state.busy = state.busy.then(settleLookahead).then(() => call(Request.restore(snapshot)));
 }
 
 // Re-tracks from the shown frame after a settings change, and shows it.

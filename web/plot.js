@@ -21,10 +21,27 @@ export function pageStats() {
   return {
     fps: intervals.length ? 1000 / median(intervals) : NaN,
     decode_ms: median(recent.map((r) => r.decodeMs)),
+    segment_ms: median(recent.map((r) => r.segmentMs)),
+    cloud_ms: median(recent.map((r) => r.cloudMs)),
     track_ms: median(recent.map((r) => r.trackMs)),
     total_ms: median(recent.map((r) => r.totalMs)),
     frames: recent.length,
+    decoder: state.decoder,
   };
+}
+
+// The small panel over the image's corner: the same medians.
+export function updateStatsPanel() {
+  const s = pageStats();
+  $('stats-panel').textContent = [
+    `${fixed(s.fps, 0)} frames/s`,
+    `decode ${fixed(s.decode_ms, 1)} ms (${s.decoder})`,
+    `segment ${fixed(s.segment_ms, 2)} ms`,
+    `cloud ${fixed(s.cloud_ms, 2)} ms`,
+    `track ${fixed(s.track_ms, 2)} ms`,
+    `frame ${fixed(s.total_ms, 2)} ms`,
+  ].join('\n');
+  $('stats-panel').title = `Medians over the last ${s.frames} frames; "frame" is segmentation + cloud + tracking`;
 }
 
 export function updateLabels() {

@@ -14,8 +14,9 @@
 // recording  file (a File, not copied), name, dlo (text|null)  { info, details }; while the index is
 //                                                              read: { id, progress: [offset, length] }
 // frame      index, track, color, depth, colorName,          { index, width, height, decodeMs, rgba,
-//            depthName, fromZip, fromRecording, depthScale,    [nodes, nodesPx, visible, status, reason,
-//            occlusions, groundtruth, wantMask, wantDepth       trackMs, totalMs, error, second, snapshot,
+//            depthName, fromZip, fromRecording, depthScale,    [nodes, nodesPx, visible, status, reason, segmentMs, cloudMs,
+//            occlusions, groundtruth, wantMask, wantDepth,      trackMs, totalMs, error, second, snapshot,
+//            decoder ('browser' | 'wasm')
 //                                                               mask], [depth (RGBA ramp)] }
 
 export const Request = {
@@ -33,5 +34,6 @@ export const Request = {
     colorName: f.colorName, depthName: f.depthName, fromZip: f.fromZip,
     fromRecording: f.fromRecording, depthScale: f.depthScale,
     occlusions: f.occlusions, groundtruth: f.groundtruth, wantMask: f.wantMask, wantDepth: f.wantDepth,
+    decoder: f.decoder,
   }),
 };

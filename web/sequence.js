@@ -1,6 +1,6 @@
 // Opening sequences (bundled samples, a folder, dropped files, a .zip) and
 // reading one frame's files, at most one frame ahead.
-import { state, progress, $ } from './state.js';
+import { state, progress, $, settleLookahead } from './state.js';
 import { call } from './worker-client.js';
 import { Request } from './protocol.js';
 import { commonRoot } from './core.js';
@@ -43,6 +43,7 @@ export async function openRecording(file, dloFile) {
 
 async function finishOpening(generation, seq) {
   const { info } = seq;
+  await settleLookahead();
   await call(Request.open(info.camera, state.params, info.hsv, state.compare));
   if (generation !== state.generation) return;
   state.seq = seq;
@@ -171,5 +172,6 @@ export async function requestFrame(i, track) {
     index: i, track, color, depth, colorName: info.color_files[i], depthName: info.depth_files[i],
     fromZip: seq.fromZip, fromRecording: seq.fromRecording, depthScale: info.depth_scale, occlusions: activeRects(i),
     groundtruth: info.groundtruth[i], wantMask: $('show-mask').checked, wantDepth: $('show-depth').checked,
+    decoder: state.decoder,
   }), transfer);
 }

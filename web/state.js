@@ -9,7 +9,7 @@ export const state = {
   seq: null,          // { name, info, read(path), fromZip, fromRecording, details, configured }
   index: 0,           // frame shown
   tracked: -1,        // last frame tracked (frames are tracked in order)
-  results: [],        // per frame: { nodes, nodesPx, visible, status, reason, trackMs, totalMs, error, snapshot, second }
+  results: [],        // per frame: { nodes, nodesPx, visible, status, reason, segmentMs, cloudMs, trackMs, totalMs, decodeMs, error, snapshot, second }
   params: null,       // parameters in force (all fields, with the algorithm)
   compare: '',        // algorithm tracked alongside for comparison ('' for none)
   hsv: null,          // { lower, upper } in force
@@ -22,10 +22,20 @@ export const state = {
   shownAt: [],        // display timestamps, for the frame rate
   generation: 0,      // bumped when a new sequence opens
   epoch: 0,           // bumped when settings change; a look-ahead from an older epoch is dropped
-  lookahead: null,    // { index, epoch, generation, promise } of the next frame, while playing
+  lookahead: [],      // [{ index, epoch, generation, promise }] of the next frames, while playing
+  decoder: 'wasm',    // colour decoded by 'wasm' (as the command does), 'browser' (ImageDecoder) or 'canvas' (createImageBitmap)
   errors: [],         // every message shown in the banner, for scripts and tests
   note: false,        // the banner shows a hint (showNote), not an error
 };
+
+// Waits for every frame requested ahead to come back (tracked by the worker
+// with the state it had) and forgets them: a restore or a new tracker sent
+// after this cannot overtake them.
+export async function settleLookahead() {
+  const pending = state.lookahead.map((l) => l.promise.catch(() => {}));
+  state.lookahead = [];
+  await Promise.all(pending);
+}
 
 export function showError(text) {
   state.note = false;

@@ -1,8 +1,13 @@
-// The tracker runs here, off the page's main thread: decoding (PNG, JPEG,
-// .zip) and tracking both happen in WebAssembly. Requests and replies are
-// those of protocol.js.
+// The tracker runs here, off the page's main thread. A frame's colour file
+// is decoded by the browser's own decoder (createImageBitmap, which works
+// off this thread) as soon as its request arrives, while earlier frames are
+// still being tracked; depth PNGs, .zip, recordings and tracking run in
+// WebAssembly, in the order the requests came. `decoder: 'wasm'` decodes
+// colour in WebAssembly too, bit for bit as the command does; `canvas`
+// always takes the createImageBitmap route. Requests and
+// replies are those of protocol.js.
 import init, {
-  WasmTracker, decodeFrame, Archive, Recording, readSequenceInfo, defaultParams, parseParams, depthRgba,
+  WasmTracker, decodeFrame, decodeBitmapFrame, decodeRgbaFrame, Archive, Recording, readSequenceInfo, defaultParams, parseParams, depthRgba,
 } from './pkg/upetrack_wasm.js';
 import { Request } from './protocol.js';
 
@@ -21,7 +26,7 @@ function track(t, f, m) {
   const r = t.trackDecoded(f, m.depthScale, new Float64Array(m.occlusions));
   const out = {
     nodes: Array.from(r.nodes), nodesPx: Array.from(r.nodesPx), visible: Array.from(r.visible),
-    status: r.status, reason: r.reason ?? null, trackMs: r.track_ms, totalMs: r.total_ms,
+    status: r.status, reason: r.reason ?? null, segmentMs: r.segment_ms, cloudMs: r.cloud_ms, trackMs: r.track_ms, totalMs: r.total_ms,
     cloudPoints: r.cloud_points,
   };
   r.free();
@@ -29,24 +34,87 @@ function track(t, f, m) {
   return out;
 }
 
-// Frame m.index decoded: from a recording, or from its two image files.
-function decode(m) {
+// What the browser's decoders must leave alone for the pixels to be the file's.
+const AS_STORED = { colorSpaceConversion: 'none', premultiplyAlpha: 'none' };
+const IMAGE_TYPES = { jpg: 'image/jpeg', jpeg: 'image/jpeg', png: 'image/png' };
+
+// The browser's decoding of a colour file, started at once. `canvas`
+// (createImageBitmap, read back through an OffscreenCanvas in wasm) serves
+// where ImageDecoder does not (or where it is asked for); ImageDecoder
+// gives the RGBA pixels directly and is about twice as fast here.
+// Resolves to { rgba, width, height } or { bitmap }, with the ms it took.
+async function browserDecode(bytes, name, decoder) {
+  const t0 = performance.now();
+  const type = IMAGE_TYPES[name.split('.').pop().toLowerCase()];
+  if (decoder === 'browser' && self.ImageDecoder && type) {
+    const d = new ImageDecoder({ data: bytes, type, ...AS_STORED });
+    try {
+      const { image } = await d.decode();
+      try {
+        const width = image.displayWidth, height = image.displayHeight;
+        const options = { rect: { x: 0, y: 0, width, height }, format: 'RGBA', layout: [{ offset: 0, stride: 4 * width }] };
+        const rgba = new Uint8Array(image.allocationSize(options));
+        await image.copyTo(rgba, options);
+        return { rgba, width, height, ms: performance.now() - t0 };
+      } finally {
+        image.close();
+      }
+    } finally {
+      d.close();
+    }
+  }
+  const bitmap = await createImageBitmap(new Blob([bytes]), AS_STORED);
+  return { bitmap, ms: performance.now() - t0 };
+}
+
+const BROWSER_DECODERS = new Set(['browser', 'canvas']);
+
+// Colour decoding started when a frame's request arrives (its files came
+// with it), before the frames ahead of it are tracked.
+function startDecode(m) {
+  if (!BROWSER_DECODERS.has(m.decoder) || m.fromRecording || m.fromZip || !m.color) return null;
+  const p = browserDecode(m.color, m.colorName, m.decoder);
+  p.catch(() => {});
+  return p;
+}
+
+// Frame m.index decoded, and the milliseconds its decoding took.
+async function decode(m, early) {
   if (m.fromRecording) {
     if (!recording) throw new Error('no recording is open');
-    return recording.frame(m.index);
+    const t0 = performance.now();
+    const f = recording.frame(m.index);
+    return [f, performance.now() - t0];
   }
   let color = m.color, depth = m.depth;
   if (archive && m.fromZip) {
     color = archive.read(m.colorName).buffer;
     depth = archive.read(m.depthName).buffer;
   }
-  return decodeFrame(new Uint8Array(color), m.colorName, new Uint8Array(depth), m.depthName);
+  const colorDecode = early || (BROWSER_DECODERS.has(m.decoder) ? browserDecode(color, m.colorName, m.decoder) : null);
+  if (!colorDecode) {
+    const t0 = performance.now();
+    const f = decodeFrame(new Uint8Array(color), m.colorName, new Uint8Array(depth), m.depthName);
+    return [f, performance.now() - t0];
+  }
+  let c;
+  try {
+    c = await colorDecode;
+  } catch (err) {
+    throw new Error(`${m.colorName}: the browser cannot decode this image (${err.message || err})`);
+  }
+  const t0 = performance.now();
+  const d = new Uint8Array(depth);
+  if (c.rgba) return [decodeRgbaFrame(c.rgba, c.width, c.height, m.colorName, d, m.depthName), c.ms + performance.now() - t0];
+  try {
+    return [decodeBitmapFrame(c.bitmap, m.colorName, d, m.depthName), c.ms + performance.now() - t0];
+  } finally {
+    c.bitmap.close();
+  }
 }
 
-function frame(m) {
-  const t0 = performance.now();
-  const f = decode(m);
-  const decodeMs = performance.now() - t0;
+async function frame(m, early) {
+  const [f, decodeMs] = await decode(m, early);
   const rgba = f.rgba;
   const out = { index: m.index, width: f.width, height: f.height, decodeMs, rgba: rgba.buffer };
   const transfer = [rgba.buffer];
@@ -120,12 +188,20 @@ const handlers = {
   frame,
 };
 
-onmessage = async (e) => {
+// Requests are served one at a time in arrival order; only a frame's
+// browser decoding starts on arrival.
+let queue = Promise.resolve();
+onmessage = (e) => {
   const m = e.data;
+  const early = m.type === 'frame' ? startDecode(m) : null;
+  queue = queue.then(() => serve(m, early));
+};
+
+async function serve(m, early) {
   try {
     await ready;
     if (!(m.type in Request) || !(m.type in handlers)) throw new Error(`unknown request ${m.type}`);
-    const r = handlers[m.type](m);
+    const r = await handlers[m.type](m, early);
     if (Array.isArray(r)) postMessage({ id: m.id, ok: true, ...r[0] }, r[1]);
     else postMessage({ id: m.id, ok: true, ...(r ?? {}) });
   } catch (err) {

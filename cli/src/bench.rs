@@ -1,12 +1,13 @@
-//! `upetrack bench`: per-frame cost of the tracker, as medians over frames,
-//! on synthetic D435i-like 640x480 frames (or given sequences). Decoding is
-//! excluded, as in the contract's `total_ms`.
+//! `upetrack bench`: per-frame cost of each stage (segmentation, point
+//! cloud, tracking step, the whole frame), as medians over frames, on
+//! synthetic D435i-like 640x480 frames or on given sequences (whose
+//! reading and decoding is timed apart: the contract's `total_ms` excludes it).
 
 use std::time::Instant;
 
 use upetrack::{Frame, Tracker};
 use upetrack_io::eval::quantile;
-use upetrack_io::run::track_frame;
+use upetrack_io::run::run_frame;
 use upetrack_synth::{RenderSettings, Scenario, ScenarioKind};
 
 use crate::{algorithms, load_params, open_sequence, with_algorithm, Args, CliError};
@@ -18,30 +19,38 @@ struct Prepared {
     hsv: upetrack::HsvRange,
     depth_scale: f64,
     frames: Vec<(Vec<u8>, Vec<u16>, Vec<upetrack::Rect>)>,
+    /// Decoding time of each frame's files, ms (none for rendered frames).
+    decode_ms: Vec<f64>,
 }
 
-fn timed(
-    p: &Prepared,
-    params: upetrack::Params,
-    repeats: usize,
-) -> Result<(Vec<f64>, Vec<f64>), CliError> {
-    let mut track = Vec::new();
-    let mut total = Vec::new();
+/// Per-frame times of every stage, ms, over all frames and runs.
+#[derive(Default)]
+struct StageTimes {
+    segment: Vec<f64>,
+    cloud: Vec<f64>,
+    track: Vec<f64>,
+    total: Vec<f64>,
+}
+
+fn timed(p: &Prepared, params: upetrack::Params, repeats: usize) -> Result<StageTimes, CliError> {
+    let mut t = StageTimes::default();
     for _ in 0..repeats {
         let mut tracker =
             Tracker::new(params, p.camera, p.hsv).map_err(|e| CliError(e.to_string()))?;
         let start = Instant::now();
         let mut now = move || start.elapsed().as_secs_f64() * 1000.0;
-        for (i, (rgb, depth, occ)) in p.frames.iter().enumerate() {
+        for (rgb, depth, occ) in &p.frames {
             let frame = Frame::new(p.camera.width, p.camera.height, rgb, depth, p.depth_scale)
                 .map_err(|e| CliError(e.to_string()))?;
-            let rec = track_frame(&mut tracker, i, &frame, occ, &mut now)
+            let rec = run_frame(&mut tracker, &frame, occ, &mut now)
                 .map_err(|e| CliError(e.to_string()))?;
-            track.push(rec.track_ms);
-            total.push(rec.total_ms);
+            t.segment.push(rec.segment_ms);
+            t.cloud.push(rec.cloud_ms);
+            t.track.push(rec.track_ms);
+            t.total.push(rec.total_ms);
         }
     }
-    Ok((track, total))
+    Ok(t)
 }
 
 /// `upetrack bench [<sequence>...] [--frames N] [--repeat R] [--algorithm A,B,..]`.
@@ -73,14 +82,18 @@ pub fn cmd_bench(raw: &[String]) -> Result<(), CliError> {
                 hsv: s.hsv(),
                 depth_scale: 0.001,
                 frames: fr,
+                decode_ms: Vec::new(),
             });
         }
     } else {
         for path in &args.positional {
             let seq = open_sequence(path, &crate::RecordingArgs::from(&args)?)?;
             let mut fr = Vec::new();
+            let mut decode_ms = Vec::new();
             for i in 0..seq.len().min(frames) {
+                let t = Instant::now();
                 let d = seq.frame(i)?;
+                decode_ms.push(t.elapsed().as_secs_f64() * 1000.0);
                 fr.push((d.color, d.depth, seq.occlusions_at(i)));
             }
             sets.push(Prepared {
@@ -89,28 +102,35 @@ pub fn cmd_bench(raw: &[String]) -> Result<(), CliError> {
                 hsv: seq.hsv,
                 depth_scale: seq.depth_scale,
                 frames: fr,
+                decode_ms,
             });
         }
     }
     let params = load_params(args.value("params"))?;
     let algorithms = algorithms(&args, &params)?;
-    println!("| data | algorithm | size | frames x runs | median track_ms | p90 track_ms | median total_ms | p90 total_ms |");
-    println!("|---|---|---|---:|---:|---:|---:|---:|");
+    println!("| data | algorithm | size | frames x runs | median read+decode | median segmentation | median cloud | median tracking step | median whole frame | p90 whole frame |");
+    println!("|---|---|---|---:|---:|---:|---:|---:|---:|---:|");
     for p in &sets {
+        let decode = if p.decode_ms.is_empty() {
+            "-".to_string()
+        } else {
+            format!("{:.3}", quantile(&p.decode_ms, 0.5))
+        };
         for &a in &algorithms {
-            let (track, total) = timed(p, with_algorithm(params, a), repeats)?;
+            let t = timed(p, with_algorithm(params, a), repeats)?;
             println!(
-                "| {} | {} | {}x{} | {} x {} | {:.3} | {:.3} | {:.3} | {:.3} |",
+                "| {} | {} | {}x{} | {} x {} | {decode} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} |",
                 p.name,
                 a.name(),
                 p.camera.width,
                 p.camera.height,
                 p.frames.len(),
                 repeats,
-                quantile(&track, 0.5),
-                quantile(&track, 0.9),
-                quantile(&total, 0.5),
-                quantile(&total, 0.9)
+                quantile(&t.segment, 0.5),
+                quantile(&t.cloud, 0.5),
+                quantile(&t.track, 0.5),
+                quantile(&t.total, 0.5),
+                quantile(&t.total, 0.9)
             );
         }
     }

@@ -16,6 +16,10 @@ pub struct TimedFrame {
     pub observation: Observation,
     /// The tracker's output.
     pub output: FrameOutput,
+    /// Segmentation alone, ms.
+    pub segment_ms: f64,
+    /// The point cloud alone (deprojection, voxel grid, offset), ms.
+    pub cloud_ms: f64,
     /// The tracking step alone, ms.
     pub track_ms: f64,
     /// Segmentation, point cloud and tracking step, ms.
@@ -31,15 +35,24 @@ pub fn run_frame(
     now_ms: &mut dyn FnMut() -> f64,
 ) -> Result<TimedFrame, upetrack::tracker::TrackerError> {
     let t0 = now_ms();
-    let observation = tracker.observe(frame, occlusions)?;
+    let mask = tracker.segment(frame, occlusions)?;
     let t1 = now_ms();
-    let output = tracker.update(frame, &observation);
+    let cloud = tracker.cloud(frame, &mask);
     let t2 = now_ms();
+    let observation = Observation {
+        mask,
+        cloud,
+        occlusions: occlusions.to_vec(),
+    };
+    let output = tracker.update(frame, &observation);
+    let t3 = now_ms();
     Ok(TimedFrame {
         observation,
         output,
-        track_ms: t2 - t1,
-        total_ms: t2 - t0,
+        segment_ms: t1 - t0,
+        cloud_ms: t2 - t1,
+        track_ms: t3 - t2,
+        total_ms: t3 - t0,
     })
 }
 

@@ -57,7 +57,10 @@ async function newPage(query = '', { errors = false } = {}) {
   await page.evaluate(() => window.upetrack.ready);
   return page;
 }
+// ONLY=<regex> runs the tests whose names match (while working on one).
+const only = process.env.ONLY ? new RegExp(process.env.ONLY) : null;
 async function test(name, fn) {
+  if (only && !only.test(name)) return;
   try { await fn(); passed++; console.log(`ok   ${name}`); }
   catch (e) { failed++; console.log(`FAIL ${name}\n     ${e.stack || e}`); }
 }
@@ -83,8 +86,8 @@ await test('page loads, default sample plays, nodes lie on the rope', async () =
   await page.close();
 });
 
-await test('wasm and native give bit-identical nodes', async () => {
-  const page = await newPage('?autoplay=0');
+await test('wasm and native give bit-identical nodes (colour decoded in wasm)', async () => {
+  const page = await newPage('?autoplay=0&decode=wasm');
   const web = await page.evaluate(() => window.upetrack.trackAll());
   const ref = JSON.parse(fs.readFileSync(nativeJson, 'utf8'));
   assert(web.frames.length === ref.frames.length, `frame counts ${web.frames.length} vs ${ref.frames.length}`);
@@ -179,8 +182,12 @@ await test('dropping a corrupt file or a folder that is not a sequence shows a m
   await page.close();
 });
 
-await test('playback with decoding and tracking: same nodes as native; rate printed as a benchmark', async () => {
-  const page = await newPage('?autoplay=0&speed=4');
+// The browser's JPEG decoder is not the command's (zune-jpeg): pixels differ
+// by a unit here and there, and nodes by about 0.1 mm (docs/testing.md).
+const BROWSER_DECODE_TOLERANCE_M = 2e-4;
+
+for (const decoder of ['browser', 'canvas']) await test(`playback with the browser decoding colour (decode=${decoder}): nodes within 0.2 mm of native; stats filled; rate printed`, async () => {
+  const page = await newPage(`?autoplay=0&speed=4&decode=${decoder}`);
   const r = await page.evaluate(async () => {
     const u = window.upetrack;
     const n = u.state.seq.info.color_files.length;
@@ -190,8 +197,11 @@ await test('playback with decoding and tracking: same nodes as native; rate prin
     const ms = (performance.now() - t0) / (n - 1);
     const res = u.state.results.slice(1);
     const med = (xs) => [...xs].sort((a, b) => a - b)[xs.length >> 1];
-    return { perFrame: ms, decode: med(res.map((x) => x.decodeMs)), total: med(res.map((x) => x.totalMs)), track: med(res.map((x) => x.trackMs)), result: u.resultJson(), stats: u.stats };
+    return { perFrame: ms, decode: med(res.map((x) => x.decodeMs)), total: med(res.map((x) => x.totalMs)), track: med(res.map((x) => x.trackMs)), result: u.resultJson(), stats: u.stats,
+      panel: document.getElementById('stats-panel').textContent };
   });
+  assert(new RegExp(`frames/s\\ndecode [0-9.]+ ms \\(${decoder}\\)\\nsegment [0-9.]+ ms\\ncloud [0-9.]+ ms\\ntrack [0-9.]+ ms\\nframe [0-9.]+ ms`).test(r.panel), `stats panel: ${JSON.stringify(r.panel)}`);
+  assert(r.stats.segment_ms > 0 && r.stats.cloud_ms > 0 && r.stats.segment_ms + r.stats.cloud_ms + r.stats.track_ms <= r.stats.total_ms * 1.5 + 0.1, `stage medians: ${JSON.stringify(r.stats)}`);
   // window.upetrack.stats: medians of the frames shown, and a display rate near the measured one.
   const st = r.stats;
   assert(st.frames === 25 && [st.fps, st.decode_ms, st.track_ms, st.total_ms].every(Number.isFinite), `stats not filled: ${JSON.stringify(st)}`);
@@ -201,7 +211,8 @@ await test('playback with decoding and tracking: same nodes as native; rate prin
   const ref = JSON.parse(fs.readFileSync(nativeJson, 'utf8'));
   let worst = 0;
   ref.frames.forEach((f, k) => f.nodes.forEach((p, j) => p.forEach((c, d) => { worst = Math.max(worst, Math.abs(c - r.result.frames[k].nodes[j][d])); })));
-  assert(r.result.frames.length === ref.frames.length && worst === 0, `played result differs from native by ${worst}`);
+  console.log(`     browser decoding: largest node difference from native ${worst.toExponential(2)} m`);
+  assert(r.result.frames.length === ref.frames.length && worst > 0 && worst < BROWSER_DECODE_TOLERANCE_M, `played result differs from native by ${worst}`);
   await page.close();
 });
 
@@ -270,7 +281,7 @@ await test('two algorithms on one sequence: each matches its native run, both dr
     execFileSync(native, ['track', seq, '--algorithm', a, '--out', out]);
     refs[a] = JSON.parse(fs.readFileSync(out, 'utf8'));
   }
-  const page = await newPage('?sample=dynamic-pull&autoplay=0&compare=trackdlo');
+  const page = await newPage('?sample=dynamic-pull&autoplay=0&compare=trackdlo&decode=wasm');
   const got = await page.evaluate(async () => {
     const u = window.upetrack;
     const main = await u.trackAll();

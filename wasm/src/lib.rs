@@ -13,6 +13,7 @@ use upetrack_io::sequence::{DloConfig, OcclusionConfig, Sequence};
 use upetrack_io::source::{MemorySource, Source};
 use wasm_bindgen::prelude::*;
 
+mod browser;
 mod recording;
 
 fn js_err(e: impl std::fmt::Display) -> JsError {
@@ -131,6 +132,10 @@ pub struct FrameResult {
     visible: Vec<u8>,
     status: String,
     reason: Option<String>,
+    /// Segmentation time, ms.
+    pub segment_ms: f64,
+    /// Point cloud time, ms.
+    pub cloud_ms: f64,
     /// Tracking step time, ms.
     pub track_ms: f64,
     /// Segmentation, point cloud and tracking step, ms.
@@ -258,6 +263,8 @@ impl WasmTracker {
             visible: out.visible.iter().map(|&v| v as u8).collect(),
             status: status.into(),
             reason,
+            segment_ms: timed.segment_ms,
+            cloud_ms: timed.cloud_ms,
             track_ms: timed.track_ms,
             total_ms: timed.total_ms,
             cloud_points: obs.cloud.len() as u32,
@@ -320,7 +327,56 @@ pub struct DecodedFrame {
     /// Height.
     pub height: u32,
     rgb: Vec<u8>,
+    /// The colour as RGBA8 when the browser decoded it so, kept for display.
+    rgba: Option<Vec<u8>>,
     depth: Vec<u16>,
+}
+
+impl DecodedFrame {
+    /// RGB8 colour of `width` x `height` with its depth image, which must
+    /// have the same size.
+    fn paired(
+        width: u32,
+        height: u32,
+        rgb: Vec<u8>,
+        depth: upetrack_io::decode::DepthImage,
+        color_name: &str,
+        depth_name: &str,
+    ) -> Result<Self, JsError> {
+        if (width, height) != (depth.width, depth.height) {
+            return Err(JsError::new(&format!(
+                "{depth_name}: depth is {}x{} but {color_name} is {width}x{height}",
+                depth.width, depth.height
+            )));
+        }
+        Ok(Self {
+            width,
+            height,
+            rgb,
+            rgba: None,
+            depth: depth.data,
+        })
+    }
+
+    /// As `paired`, from RGBA8 colour; alpha is dropped (made opaque), as
+    /// the wasm decoder drops it.
+    fn from_rgba(
+        width: u32,
+        height: u32,
+        mut rgba: Vec<u8>,
+        depth: upetrack_io::decode::DepthImage,
+        color_name: &str,
+        depth_name: &str,
+    ) -> Result<Self, JsError> {
+        let rgb = rgba
+            .chunks_exact(4)
+            .flat_map(|p| [p[0], p[1], p[2]])
+            .collect();
+        rgba.chunks_exact_mut(4).for_each(|p| p[3] = u8::MAX);
+        let mut frame = Self::paired(width, height, rgb, depth, color_name, depth_name)?;
+        frame.rgba = Some(rgba);
+        Ok(frame)
+    }
 }
 
 #[wasm_bindgen]
@@ -333,7 +389,10 @@ impl DecodedFrame {
     /// RGBA8 bytes, for an ImageData.
     #[wasm_bindgen(getter)]
     pub fn rgba(&self) -> js_sys::Uint8ClampedArray {
-        js_sys::Uint8ClampedArray::from(&rgba_of(&self.rgb)[..])
+        match &self.rgba {
+            Some(rgba) => js_sys::Uint8ClampedArray::from(&rgba[..]),
+            None => js_sys::Uint8ClampedArray::from(&rgba_of(&self.rgb)[..]),
+        }
     }
     /// Depth units.
     #[wasm_bindgen(getter)]
@@ -353,18 +412,7 @@ pub fn decode_frame(
 ) -> Result<DecodedFrame, JsError> {
     let c = decode_color(color, color_name).map_err(js_err)?;
     let d = decode_depth(depth, depth_name).map_err(js_err)?;
-    if (c.width, c.height) != (d.width, d.height) {
-        return Err(JsError::new(&format!(
-            "{depth_name}: depth is {}x{} but {color_name} is {}x{}",
-            d.width, d.height, c.width, c.height
-        )));
-    }
-    Ok(DecodedFrame {
-        width: c.width,
-        height: c.height,
-        rgb: c.data,
-        depth: d.data,
-    })
+    DecodedFrame::paired(c.width, c.height, c.data, d, color_name, depth_name)
 }
 
 /// A .zip unpacked in memory; frames are read from it on demand.

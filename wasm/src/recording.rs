@@ -157,6 +157,7 @@ impl Recording {
             width: f.width,
             height: f.height,
             rgb: f.color,
+            rgba: None,
             depth: f.depth,
         })
     }

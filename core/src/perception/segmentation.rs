@@ -262,29 +262,112 @@ pub fn rgb_to_hsv(rgb: [u8; 3]) -> [u8; 3] {
     ]
 }
 
+/// Pixels tested together by the vectorised pre-test of [`segment`].
+const SEGMENT_BLOCK: usize = 32;
+
+/// 1 at the bytes of a block of RGB8 pixels where a pixel starts.
+const PIXEL_STARTS: [u8; 3 * SEGMENT_BLOCK] = {
+    let mut t = [0u8; 3 * SEGMENT_BLOCK];
+    let mut i = 0;
+    while i < SEGMENT_BLOCK {
+        t[3 * i] = 1;
+        i += 1;
+    }
+    t
+};
+
+/// For each value `v` (the largest channel), the chroma `diff = max - min`
+/// whose saturation falls in `range` form one interval (saturation grows
+/// with `diff` at a fixed `v`): `(first, count)`, `count = 0` where `v` is
+/// outside the value range. A pixel then passes both tests when
+/// `diff - first < count` as unsigned numbers.
+fn chroma_intervals(range: &HsvRange) -> [(i32, u32); 256] {
+    let (v_lo, v_hi) = (range.lower[2] as i32, range.upper[2] as i32);
+    let (s_lo, s_hi) = (range.lower[1] as i32, range.upper[1] as i32);
+    let mut table = [(0, 0); 256];
+    for (v, slot) in table.iter_mut().enumerate() {
+        let v = v as i32;
+        if v < v_lo || v > v_hi {
+            continue;
+        }
+        // The first diff in 0..=v whose saturation is at least `s`
+        // (v + 1 when none is), by bisection on the monotone saturation.
+        let first_reaching = |s: i32| {
+            let (mut lo, mut hi) = (0, v + 1);
+            while lo < hi {
+                let mid = (lo + hi) / 2;
+                if saturation(v, mid) >= s {
+                    hi = mid;
+                } else {
+                    lo = mid + 1;
+                }
+            }
+            lo
+        };
+        let first = first_reaching(s_lo);
+        let end = first_reaching(s_hi + 1);
+        if end > first {
+            *slot = (first, (end - first) as u32);
+        }
+    }
+    table
+}
+
 /// Segments `frame` with `range` after setting the colour pixels inside each
 /// of `occlusions` to black (depth is left as it is). Value and saturation
-/// are tested first, so hue is computed only for candidate pixels.
+/// are tested together by one table lookup per pixel ([`chroma_intervals`]),
+/// so hue is computed only for candidate pixels.
 pub fn segment(frame: &Frame<'_>, range: &HsvRange, occlusions: &[Rect]) -> Mask {
     let mut mask = Mask::new(frame.width, frame.height);
     let mut hue_ok = [false; 256];
     for (h, ok) in hue_ok.iter_mut().enumerate().take(HUE_MAX as usize + 1) {
         *ok = range.contains([h as u8, range.lower[1], range.lower[2]]);
     }
-    let (v_lo, v_hi) = (range.lower[2] as i32, range.upper[2] as i32);
-    let (s_lo, s_hi) = (range.lower[1] as i32, range.upper[1] as i32);
-    for (px, m) in frame.color.chunks_exact(3).zip(mask.data.iter_mut()) {
-        let (r, g, b) = (px[0] as i32, px[1] as i32, px[2] as i32);
-        let v = r.max(g).max(b);
-        if v < v_lo || v > v_hi {
-            continue;
+    let chroma = chroma_intervals(range);
+    // A block of pixels none of which reaches the value range and the
+    // smallest passing chroma is skipped after a test the compiler
+    // vectorises; the exact test runs only on the other blocks.
+    let (v_lo, v_hi) = (range.lower[2], range.upper[2]);
+    let least_diff = chroma
+        .iter()
+        .filter(|c| c.1 > 0)
+        .map(|c| c.0)
+        .min()
+        .map_or(u8::MAX, |d| d.min(255) as u8);
+    let color = frame.color;
+    for (k, m) in mask.data.chunks_mut(SEGMENT_BLOCK).enumerate() {
+        let start = 3 * SEGMENT_BLOCK * k;
+        let block = &color[start..(start + 3 * m.len()).min(color.len())];
+        // Channel maximum and minimum at every byte over the next three,
+        // kept only at the bytes that start a pixel: contiguous lanes of a
+        // fixed count, so it vectorises. The last block, with no two bytes
+        // after it, goes straight to the exact test.
+        let lanes = |o: usize| -> Option<&[u8; 3 * SEGMENT_BLOCK]> {
+            color
+                .get(start + o..start + o + 3 * SEGMENT_BLOCK)?
+                .try_into()
+                .ok()
+        };
+        if let (Some(r), Some(g), Some(b)) = (lanes(0), lanes(1), lanes(2)) {
+            let mut candidates = 0u8;
+            for i in 0..3 * SEGMENT_BLOCK {
+                let (hi, lo) = (r[i].max(g[i]).max(b[i]), r[i].min(g[i]).min(b[i]));
+                candidates |=
+                    PIXEL_STARTS[i] & u8::from(hi >= v_lo && hi <= v_hi && hi - lo >= least_diff);
+            }
+            if candidates == 0 {
+                continue;
+            }
         }
-        let diff = v - r.min(g).min(b);
-        let s = saturation(v, diff);
-        if s < s_lo || s > s_hi {
-            continue;
+        for (px, m) in block.chunks_exact(3).zip(m) {
+            let (r, g, b) = (px[0] as i32, px[1] as i32, px[2] as i32);
+            let v = r.max(g).max(b);
+            let diff = v - r.min(g).min(b);
+            let (first, count) = chroma[v as usize];
+            if ((diff - first) as u32) < count {
+                *m = hue_ok[hue(r, g, b, v, diff) as usize];
+            }
         }
-        *m = hue_ok[hue(r, g, b, v, diff) as usize];
     }
     let black_in_range = range.contains(rgb_to_hsv([0, 0, 0]));
     let width = frame.width as usize;
@@ -397,6 +480,80 @@ mod tests {
                     range.contains(rgb_to_hsv([px[0], px[1], px[2]])),
                     "{px:?}"
                 );
+            }
+        }
+    }
+
+    /// The block pre-test may skip a block only when no pixel of it is in
+    /// range: images of sizes that leave a partial last block, mostly grey
+    /// with rope-coloured pixels scattered at block edges, many ranges.
+    #[test]
+    fn skipped_blocks_hold_no_rope_pixel_and_the_last_partial_block_is_tested() {
+        let mut rng = crate::rng::SplitMix64::new(11);
+        for (width, height) in [(37u32, 29u32), (640, 3), (31, 1), (33, 2)] {
+            let n = (width * height) as usize;
+            let mut color = alloc::vec![0u8; 3 * n];
+            for (i, px) in color.chunks_exact_mut(3).enumerate() {
+                let grey = rng.below(256) as u8;
+                let rope = rng.below(9) == 0 || i % SEGMENT_BLOCK == 0 || i + 1 == n;
+                let rgb = if rope {
+                    [
+                        rng.below(256) as u8,
+                        rng.below(256) as u8,
+                        rng.below(256) as u8,
+                    ]
+                } else {
+                    [grey, grey.saturating_add(rng.below(4) as u8), grey]
+                };
+                px.copy_from_slice(&rgb);
+            }
+            let depth = alloc::vec![0u16; n];
+            let f = Frame::new(width, height, &color, &depth, 0.001).expect("frame");
+            for _ in 0..40 {
+                let mut lower = [0u8; 3];
+                let mut upper = [0u8; 3];
+                for c in 0..3 {
+                    let top = if c == 0 { 180 } else { 256 };
+                    let (a, b) = (rng.below(top) as u8, rng.below(top) as u8);
+                    // Hue may wrap (lower > upper); S and V are ordered.
+                    (lower[c], upper[c]) = if c == 0 { (a, b) } else { (a.min(b), a.max(b)) };
+                }
+                let range = HsvRange { lower, upper };
+                let m = segment(&f, &range, &[]);
+                for (i, px) in color.chunks_exact(3).enumerate() {
+                    let want = range.contains(rgb_to_hsv([px[0], px[1], px[2]]));
+                    assert_eq!(
+                        m.data[i], want,
+                        "{width}x{height} pixel {i} {px:?} {range:?}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// The value-and-saturation table against both tests, for every value
+    /// and chroma, over a grid of saturation and value bounds.
+    #[test]
+    fn chroma_intervals_hold_exactly_the_passing_chroma() {
+        for s_lo in (0..=255).step_by(17) {
+            for s_hi in (s_lo..=255).step_by(23) {
+                let range = HsvRange {
+                    lower: [0, s_lo as u8, 30],
+                    upper: [179, s_hi as u8, 240],
+                };
+                let table = chroma_intervals(&range);
+                for v in 0..256i32 {
+                    for d in 0..=v {
+                        let s = saturation(v, d);
+                        let want = (30..=240).contains(&v) && s >= s_lo && s <= s_hi;
+                        let (first, count) = table[v as usize];
+                        assert_eq!(
+                            ((d - first) as u32) < count,
+                            want,
+                            "v {v} diff {d} s {s_lo}..{s_hi}"
+                        );
+                    }
+                }
             }
         }
     }

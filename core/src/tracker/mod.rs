@@ -282,14 +282,26 @@ impl Tracker {
         frame: &Frame<'_>,
         occlusions: &[Rect],
     ) -> Result<Observation, TrackerError> {
-        frame.check_camera(&self.camera)?;
-        let mask = segment(frame, &self.hsv, occlusions);
-        let cloud = build_cloud(frame, &mask, &self.camera, &self.cloud_settings());
+        let mask = self.segment(frame, occlusions)?;
+        let cloud = self.cloud(frame, &mask);
         Ok(Observation {
             mask,
             cloud,
             occlusions: occlusions.to_vec(),
         })
+    }
+
+    /// The first stage of [`Tracker::observe`]: the rope's mask, with the
+    /// colour range in force and `occlusions` blacked out.
+    pub fn segment(&self, frame: &Frame<'_>, occlusions: &[Rect]) -> Result<Mask, TrackerError> {
+        frame.check_camera(&self.camera)?;
+        Ok(segment(frame, &self.hsv, occlusions))
+    }
+
+    /// The second stage of [`Tracker::observe`]: the point cloud of the
+    /// masked pixels (`mask` from [`Tracker::segment`] on the same frame).
+    pub fn cloud(&self, frame: &Frame<'_>, mask: &Mask) -> Vec<Vec3> {
+        build_cloud(frame, mask, &self.camera, &self.cloud_settings())
     }
 
     /// The rope's radius in force, metres: measured at the first
