@@ -8,7 +8,10 @@ import { Request } from './protocol.js';
 import { ready as coreReady } from './core.js';
 import { hooks, loadSample, openFiles, openZip, openRecording, isRecording, entryFiles } from './sequence.js';
 import { goTo, play, updatePlayButton, SPEEDS } from './playback.js';
-import { bindPanels, setParamInputs, setHsvInputs, renderRects, addRect, pickAt, setMode } from './panels.js';
+import { bindPanels, setHsvInputs, renderRects, addRect, pickAt, setMode, applyHsv } from './panels.js';
+import { buildParamPanel, setParamInputs, applyParamsQuery, showGroupsFor } from './params-panel.js';
+import { parseHsvQuery, parseRectsQuery } from './share.js';
+import { checkDlo } from './core.js';
 import { resultJson, dloJson, download } from './export.js';
 import { pageStats } from './plot.js';
 
@@ -112,13 +115,9 @@ function applySpeed(text) {
 
 async function start() {
   await coreReady;
+  buildParamPanel();
   const { params } = await call(Request.defaults());
-  const problems = [];
-  for (const [k, v] of query) {
-    if (!k.startsWith('p.')) continue;
-    if (typeof params[k.slice(2)] === 'number' && v.trim() !== '' && Number.isFinite(Number(v))) params[k.slice(2)] = Number(v);
-    else problems.push(`${k}=${v} is not a numeric parameter`);
-  }
+  const problems = applyParamsQuery(query, params);
   if (query.has('decode')) {
     if (DECODERS.includes(query.get('decode'))) state.decoder = query.get('decode');
     else problems.push(`decode=${query.get('decode')} is not one of ${DECODERS.join(', ')}`);
@@ -134,9 +133,19 @@ async function start() {
     state.params = (await call(Request.defaults())).params;
   }
   setParamInputs(state.params);
+  showGroupsFor([state.params.algorithm, state.compare]);
   if (query.has('speed')) {
     try { applySpeed(query.get('speed')); } catch (err) { problems.push(err.message); }
   }
+  let hsv = null;
+  let rects = [];
+  try {
+    if (query.has('hsv')) {
+      const h = parseHsvQuery(query.get('hsv'));
+      hsv = checkDlo(JSON.stringify({ segmentation: { hsv_lower: h.lower, hsv_upper: h.upper } })).hsv;
+    }
+    if (query.has('rects')) rects = parseRectsQuery(query.get('rects'));
+  } catch (err) { problems.push(err.message); }
   if (problems.length) showError(problems.join('; '));
   const r = await fetch(new URL('../samples/index.json', import.meta.url));
   if (!r.ok) throw new Error(`samples/index.json: HTTP ${r.status} (run scripts/build-web.sh)`);
@@ -147,6 +156,11 @@ async function start() {
   const first = query.get('sample') || (index.samples.find((s) => s.name === 'static-s') || index.samples[0]).name;
   select.value = first;
   await loadSample(first, index);
+  // A shared link's colour range and drawn occlusions, over the sample's own.
+  if (hsv) { setHsvInputs(hsv); await applyHsv(hsv); }
+  for (const rect of rects) {
+    try { await addRect(rect); } catch (err) { showError(err.message); }
+  }
   if (query.get('autoplay') !== '0') play();
 }
 

@@ -6,24 +6,9 @@ import { call } from './worker-client.js';
 import { Request } from './protocol.js';
 import { canvas, draw, drawDragged } from './draw.js';
 import { goTo, retrackFromHere, updatePlayButton } from './playback.js';
-import { checkDlo, hsvRangeAround, parseParams } from './core.js';
-
-const PARAM_FIELDS = ['node_count', 'displacement_decay', 'curvature_retention', 'bending_resistance',
-  'displacement_weight', 'end_displacement_weight', 'visibility_radius', 'visibility_min_points'];
-const MM_FIELDS = new Set(['visibility_radius']);
-
-export function setParamInputs(p) {
-  for (const f of PARAM_FIELDS) $(`p-${f}`).value = MM_FIELDS.has(f) ? Math.round(p[f] * 1e4) / 10 : p[f];
-}
-
-function paramsFromInputs() {
-  const next = { ...state.params };
-  for (const f of PARAM_FIELDS) {
-    const v = Number($(`p-${f}`).value);
-    next[f] = MM_FIELDS.has(f) ? v / 1000 : v;
-  }
-  return next;
-}
+import { checkDlo, hsvRangeAround, parseParams, defaultParams } from './core.js';
+import { setParamInputs, paramsFromInputs, showGroupsFor } from './params-panel.js';
+import { shareLink } from './share.js';
 
 export function setHsvInputs(h) {
   ['h', 's', 'v'].forEach((c, k) => { $(`${c}-lo`).value = h.lower[k]; $(`${c}-hi`).value = h.upper[k]; });
@@ -35,7 +20,7 @@ function hsvFromInputs() {
   return checkDlo(JSON.stringify({ segmentation: { hsv_lower: lower, hsv_upper: upper } })).hsv;
 }
 
-async function applyHsv(hsv) {
+export async function applyHsv(hsv) {
   await call(Request.hsv(hsv));
   state.hsv = hsv;
   await retrackFromHere();
@@ -86,21 +71,32 @@ export function pickAt(x, y) {
 }
 
 export function bindPanels() {
-  $('params').onchange = guarded(async () => {
+  const applyParams = async (next) => {
     try {
-      const checked = parseParams(JSON.stringify(paramsFromInputs()));
+      const checked = parseParams(JSON.stringify(next));
       const r = await call(Request.params(checked));
       state.params = r.params;
+      setParamInputs(state.params);
       await retrackFromHere();
     } catch (err) {
       setParamInputs(state.params);
       throw err;
     }
+  };
+  $('params').onchange = guarded(() => applyParams(paramsFromInputs(state.params)));
+  $('reset-params').onclick = guarded(() => applyParams({ ...defaultParams(), algorithm: state.params.algorithm }));
+  $('share-link').onclick = guarded(() => {
+    const url = shareLink();
+    history.replaceState(null, '', url);
+    $('share-url').hidden = false;
+    $('share-url').value = url;
+    $('share-url').select();
   });
   // A new algorithm (or compared one) tracks the sequence again from the start.
   $('algorithms').onchange = guarded(async () => {
     state.params = { ...state.params, algorithm: $('algorithm').value };
     state.compare = $('compare').value;
+    showGroupsFor([state.params.algorithm, state.compare]);
     if (!state.seq) return;
     state.playing = false;
     updatePlayButton();

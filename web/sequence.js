@@ -47,6 +47,8 @@ async function finishOpening(generation, seq) {
   await call(Request.open(info.camera, state.params, info.hsv, state.compare));
   if (generation !== state.generation) return;
   state.seq = seq;
+  state.sampleName = null;
+  $('sample').selectedIndex = -1; // the sample list shows none while another sequence is open
   state.hsv = info.hsv;
   state.index = 0;
   state.tracked = -1;
@@ -66,6 +68,8 @@ export async function loadSample(name, index) {
     return r.arrayBuffer();
   };
   await openSequence(name, entry.files, read);
+  state.sampleName = name;
+  $('sample').value = name;
 }
 
 // Files from a folder picker or a drop ({ path, file }): the folders above

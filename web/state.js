@@ -7,6 +7,7 @@ export const ALGORITHM_NAMES = { upetrack: 'UPETrack', cpd: 'CPD', trackdlo: 'Tr
 
 export const state = {
   seq: null,          // { name, info, read(path), fromZip, fromRecording, details, configured }
+  sampleName: null,   // the bundled sample last opened, for a shared link
   index: 0,           // frame shown
   tracked: -1,        // last frame tracked (frames are tracked in order)
   results: [],        // per frame: { nodes, nodesPx, visible, status, reason, segmentMs, cloudMs, trackMs, totalMs, decodeMs, error, snapshot, second }

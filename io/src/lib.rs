@@ -12,6 +12,7 @@ pub mod eval;
 pub mod export;
 pub mod open;
 pub mod params_file;
+pub mod params_schema;
 pub mod recorded;
 pub mod recording_info;
 pub mod result;

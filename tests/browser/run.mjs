@@ -329,6 +329,65 @@ await test('two algorithms on one sequence: each matches its native run, both dr
   await page.close();
 });
 
+await test('the parameter panel edits every algorithm\'s parameters; reset restores the defaults; a shared link reproduces the settings', async () => {
+  const page = await newPage('?autoplay=0&compare=cpd');
+  const seq = path.join(root, 'samples/static-s');
+  const pfile = path.join(tmp, 'cpd-beta.json');
+  fs.writeFileSync(pfile, JSON.stringify({ cpd: { beta: 0.2 } }));
+  const out = path.join(tmp, 'cpd-beta-native.json');
+  execFileSync(native, ['track', seq, '--algorithm', 'cpd', '--params', pfile, '--out', out]);
+  const ref = JSON.parse(fs.readFileSync(out, 'utf8'));
+  const r = await page.evaluate(async () => {
+    const u = window.upetrack;
+    const rows = [...document.querySelectorAll('#params label.param')].map((l) => l.querySelector('input, select').id.slice(2));
+    const open = [...document.querySelectorAll('#params details.param-group')].filter((d) => d.open).map((d) => d.dataset.group);
+    await u.trackAll();
+    const before = u.state.results[24].second.nodes.slice();
+    // From the first frame shown, a change re-tracks the whole sequence.
+    await u.goTo(0);
+    const beta = document.getElementById('p-cpd.beta');
+    beta.value = '0.2';
+    document.getElementById('params').dispatchEvent(new Event('change'));
+    await new Promise((res) => setTimeout(res, 100));
+    await u.state.busy;
+    const second = (await u.trackAll(), u.state.results.map((x) => x.second.nodes));
+    document.getElementById('share-link').click();
+    return { rows, open, before, second, params: u.state.params, link: document.getElementById('share-url').value, address: location.href };
+  });
+  assert(r.rows.length >= 50 && ['node_count', 'displacement_decay', 'cpd.beta', 'trackdlo.mu', 'cdcpd2.zeta'].every((k) => r.rows.includes(k)), `panel rows: ${r.rows.length}`);
+  assert(r.open.join() === 'shared,upetrack,cpd', `sections open: ${r.open}`);
+  assert(r.params.cpd.beta === 0.2, `cpd.beta in force: ${r.params.cpd.beta}`);
+  // The compared CPD re-tracked with the new beta: as the command does with it.
+  let worst = 0;
+  ref.frames.forEach((f, k) => f.nodes.forEach((p, j) => p.forEach((c, d) => { worst = Math.max(worst, Math.abs(c - r.second[k][3 * j + d])); })));
+  const moved = Math.max(...r.before.map((c, i) => Math.abs(c - r.second[24][i])));
+  console.log(`     cpd.beta 0.1 -> 0.2: last frame moved ${(moved * 1000).toFixed(2)} mm; difference from the command with the same file ${worst.toExponential(2)} m`);
+  assert(moved > 1e-4 && worst === 0, `beta did not reach CPD as the command's file does: moved ${moved}, worst ${worst}`);
+  assert(/[?&]p\.cpd\.beta=0\.2(&|$)/.test(r.link) && /compare=cpd/.test(r.link) && r.address === r.link, `link: ${r.link}`);
+  // The link opens the same settings.
+  const page2 = await newPage(new URL(r.link).search);
+  const p2 = await page2.evaluate(() => ({ params: window.upetrack.state.params, compare: window.upetrack.state.compare, beta: document.getElementById('p-cpd.beta').value }));
+  assert(JSON.stringify(p2.params) === JSON.stringify(r.params) && p2.compare === 'cpd' && p2.beta === '0.2', `opened from the link: ${JSON.stringify(p2)}`);
+  // Reset: every parameter back to its default.
+  const reset = await page2.evaluate(async () => {
+    document.getElementById('reset-params').click();
+    await new Promise((res) => setTimeout(res, 100));
+    await window.upetrack.state.busy;
+    return { params: window.upetrack.state.params, beta: document.getElementById('p-cpd.beta').value };
+  });
+  const defaults = await page2.evaluate(() => import('./pkg/upetrack_wasm.js').then((w) => w.defaultParams()));
+  assert(JSON.stringify(reset.params) === JSON.stringify(defaults) && reset.beta === '0.1', `after reset: ${JSON.stringify(reset).slice(0, 200)}`);
+  await page.screenshot({ path: path.join(artifacts, 'parameters.png'), fullPage: true });
+  await page.close();
+  await page2.close();
+  // A link with a bad parameter names it and keeps the default.
+  const bad = await newPage('?autoplay=0&p.cpd.beta=abc&p.no_such=1&p.free_space=maybe', { errors: true });
+  const m = await messageOf(bad);
+  assert(m.includes('p.cpd.beta=abc is not a numeric value') && m.includes('p.no_such: no such parameter') && m.includes('p.free_space=maybe is not a true/false value'), m);
+  assert(await bad.evaluate(() => window.upetrack.state.params.cpd.beta === 0.1), 'a bad value was used');
+  await bad.close();
+});
+
 // What the command says about a bad value, without its file name.
 function nativeMessage(args) {
   try { execFileSync(native, args, { stdio: 'pipe' }); } catch (e) { return String(e.stderr); }

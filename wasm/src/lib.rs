@@ -110,6 +110,14 @@ fn to_js<T: serde::Serialize>(value: &T) -> Result<JsValue, JsError> {
         .map_err(js_err)
 }
 
+/// Every parameter as the page's panel shows it: `[{path, group, symbol,
+/// meaning, kind, min?, max?, step?, choices?, unit, scale}]`
+/// (`upetrack_io::params_schema`).
+#[wasm_bindgen(js_name = parameterSchema)]
+pub fn parameter_schema() -> Result<JsValue, JsError> {
+    to_js(&upetrack_io::params_schema::PARAMETERS)
+}
+
 /// The default parameters as a plain object (documented in `core/src/params.rs`).
 #[wasm_bindgen(js_name = defaultParams)]
 pub fn default_params() -> Result<JsValue, JsError> {

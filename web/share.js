@@ -1,0 +1,39 @@
+// The page's settings as a link, and a link's settings applied on opening:
+// the sample, the algorithms, the colour decoder, the speed, every
+// parameter that differs from its default, and the colour range and drawn
+// occlusions where they differ from the sequence's own.
+import { state, $ } from './state.js';
+import { paramsQuery } from './params-panel.js';
+
+export function shareLink() {
+  const q = new URLSearchParams();
+  if (state.sampleName && state.seq && state.seq.name === state.sampleName) q.set('sample', state.sampleName);
+  if (state.params.algorithm !== 'upetrack') q.set('algorithm', state.params.algorithm);
+  if (state.compare) q.set('compare', state.compare);
+  if (state.decoder !== 'wasm') q.set('decode', state.decoder);
+  if ($('speed').value !== '1') q.set('speed', $('speed').value);
+  for (const [k, v] of paramsQuery(state.params)) q.set(k, v);
+  const own = state.seq && state.seq.info.hsv;
+  if (state.hsv && own && JSON.stringify(state.hsv) !== JSON.stringify(own)) q.set('hsv', [...state.hsv.lower, ...state.hsv.upper].join(','));
+  if (state.userRects.length) q.set('rects', state.userRects.map((r) => r.join(',')).join(';'));
+  q.set('autoplay', '0');
+  const url = new URL(location.href);
+  url.search = q.toString();
+  return url.toString();
+}
+
+// `hsv=h,s,v,h,s,v` as { lower, upper }, or an error naming the value.
+export function parseHsvQuery(text) {
+  const v = text.split(',').map((x) => (x.trim() === '' ? NaN : Number(x)));
+  if (v.length !== 6 || !v.every(Number.isInteger)) throw new Error(`hsv=${text}: give six whole numbers, lower h,s,v then upper h,s,v`);
+  return { lower: v.slice(0, 3), upper: v.slice(3) };
+}
+
+// `rects=x,y,w,h;...` as rectangles, or an error naming the value.
+export function parseRectsQuery(text) {
+  return text.split(';').filter(Boolean).map((r) => {
+    const v = r.split(',').map((x) => (x.trim() === '' ? NaN : Number(x)));
+    if (v.length !== 4 || !v.every(Number.isInteger)) throw new Error(`rects=${text}: give x,y,w,h whole numbers for each rectangle, separated by ;`);
+    return v;
+  });
+}
