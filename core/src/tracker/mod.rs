@@ -20,7 +20,9 @@ use crate::upe::registration::EmReport;
 use crate::upe::resampling::{polyline_length, resample_uniform};
 use crate::upe::visibility::visible_nodes_relative;
 
+mod explain;
 mod stepper;
+pub use explain::FrameExplanation;
 pub use stepper::{StepReports, Stepper};
 
 /// A tracked rope longer than this multiple of its length at
@@ -329,13 +331,7 @@ impl Tracker {
 
         let prev = state.nodes.clone();
         let p = &self.params;
-        let visible = visible_nodes_relative(
-            &prev,
-            &obs.cloud,
-            p.visibility_radius,
-            p.visibility_min_points as usize,
-            p.visibility_min_fraction,
-        );
+        let visible = self.visibility(&prev, &obs.cloud);
         if !visible.iter().any(|&v| v) {
             return self.initialise_or_lose(frame, obs, Loss::JustLost);
         }
@@ -347,23 +343,9 @@ impl Tracker {
                 return out;
             }
         }
-        let out = self.stepper.step(
-            &StepInput {
-                previous: &prev,
-                cloud: &obs.cloud,
-                visible: &visible,
-                camera: &self.camera,
-                evidence: Some(Evidence {
-                    frame,
-                    mask: &obs.mask,
-                    occlusions: &obs.occlusions,
-                    camera: &self.camera,
-                    radius: self.radius(),
-                }),
-                rest_length: self.rest_length,
-            },
-            &self.params,
-        );
+        let camera = self.camera;
+        let input = self.step_input(&camera, frame, obs, &prev, &visible);
+        let out = self.stepper.step(&input, &self.params);
         if self.contradicts_evidence(&out.nodes, &obs.cloud, &out.report) {
             if let Ok(mut again) = self.try_initialise(frame, obs) {
                 again.status = FrameStatus::Recovered;
@@ -381,6 +363,44 @@ impl Tracker {
             em: out.report.em,
             upe: out.report.upe,
             trackdlo: out.report.trackdlo,
+        }
+    }
+
+    /// The shared visibility test of the `previous` nodes against `cloud`.
+    fn visibility(&self, previous: &[Vec3], cloud: &[Vec3]) -> Vec<bool> {
+        let p = &self.params;
+        visible_nodes_relative(
+            previous,
+            cloud,
+            p.visibility_radius,
+            p.visibility_min_points as usize,
+            p.visibility_min_fraction,
+        )
+    }
+
+    /// What the step of a frame gets; `camera` is the tracker's, copied so
+    /// that the step may borrow the tracker's stepper mutably.
+    fn step_input<'a>(
+        &self,
+        camera: &'a CameraIntrinsics,
+        frame: &'a Frame<'a>,
+        obs: &'a Observation,
+        previous: &'a [Vec3],
+        visible: &'a [bool],
+    ) -> StepInput<'a> {
+        StepInput {
+            previous,
+            cloud: &obs.cloud,
+            visible,
+            camera,
+            evidence: Some(Evidence {
+                frame,
+                mask: &obs.mask,
+                occlusions: &obs.occlusions,
+                camera,
+                radius: self.radius(),
+            }),
+            rest_length: self.rest_length,
         }
     }
 

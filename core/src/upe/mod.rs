@@ -4,6 +4,7 @@
 //! nodes, Eq. 6-11) and [`resampling`] (Eq. 12-15). [`UpeTrackParams`] holds
 //! the step's parameters; [`UpeTrackStep`] runs the stages.
 
+pub mod explain;
 pub mod free_space;
 pub mod length;
 pub mod occlusion;
@@ -14,9 +15,11 @@ pub mod visibility;
 
 use free_space::{clear_free_space, FreeSpaceReport};
 use length::{conserve_end_lengths, LengthReport};
-use occlusion::{estimate_hidden, HiddenMotion, UpeCoefficients, UpeReport};
-use registration::{register, EmReport, EmSettings, MAX_EM_ITERATIONS};
+use occlusion::{estimate_hidden_with_sweeps, HiddenMotion, UpeCoefficients, UpeReport};
+use registration::{register_observed, EmReport, EmSettings, MAX_EM_ITERATIONS};
 use resampling::resample_uniform;
+
+use alloc::vec::Vec;
 
 use crate::math::Vec3;
 use crate::step::{Algorithm, StepInput, StepOutput, TrackingStep};
@@ -173,27 +176,79 @@ impl TrackingStep for UpeTrackStep {
         input: &StepInput<'_>,
         settings: &UpeTrackParams,
     ) -> StepOutput<UpeTrackReport> {
-        let mut nodes = input.previous.to_vec();
-        let em = register(input.cloud, &mut nodes, input.visible, &settings.em());
-        let upe = estimate_hidden(&mut nodes, input.visible, input.previous, &settings.upe());
-        let length = match (input.rest_length, settings.conserve_length) {
-            (Some(l), true) => conserve_end_lengths(&mut nodes, input.visible, l),
-            _ => LengthReport::default(),
+        run_step(input, settings, None)
+    }
+}
+
+impl UpeTrackStep {
+    /// The same step, with every stage's result kept for display
+    /// ([`explain::StepExplanation`]); the output is the step's, bit for bit.
+    pub fn explain(
+        input: &StepInput<'_>,
+        settings: &UpeTrackParams,
+    ) -> (StepOutput<UpeTrackReport>, explain::StepExplanation) {
+        let mut e = explain::StepExplanation::default();
+        let out = run_step(input, settings, Some(&mut e));
+        (out, e)
+    }
+}
+
+/// The stages in order; `trace` (when given) keeps what each produced.
+fn run_step(
+    input: &StepInput<'_>,
+    settings: &UpeTrackParams,
+    mut trace: Option<&mut explain::StepExplanation>,
+) -> StepOutput<UpeTrackReport> {
+    let mut nodes = input.previous.to_vec();
+    let em = {
+        let mut iterations = Vec::new();
+        let mut observe = |it: registration::EmIteration<'_>| {
+            if trace.is_some() {
+                iterations.push(explain::EmStage::of(&it));
+            }
         };
-        let free_space = match (&input.evidence, settings.free_space) {
-            (Some(e), true) => clear_free_space(&mut nodes, input.visible, e),
-            _ => FreeSpaceReport::default(),
-        };
-        StepOutput {
-            nodes: resample_uniform(&nodes, input.previous.len()),
-            visible: input.visible.to_vec(),
-            report: UpeTrackReport {
-                em,
-                upe,
-                length,
-                free_space,
-            },
+        let em = register_observed(
+            input.cloud,
+            &mut nodes,
+            input.visible,
+            &settings.em(),
+            &mut observe,
+        );
+        if let Some(t) = trace.as_deref_mut() {
+            t.em = iterations;
+            t.registered = nodes.clone();
         }
+        em
+    };
+    let (upe, sweeps) =
+        estimate_hidden_with_sweeps(&mut nodes, input.visible, input.previous, &settings.upe());
+    if let Some(t) = trace.as_deref_mut() {
+        t.sweeps = sweeps;
+        t.end_runs = occlusion::hidden_end_runs(input.visible);
+        t.estimated = nodes.clone();
+    }
+    let length = match (input.rest_length, settings.conserve_length) {
+        (Some(l), true) => conserve_end_lengths(&mut nodes, input.visible, l),
+        _ => LengthReport::default(),
+    };
+    let free_space = match (&input.evidence, settings.free_space) {
+        (Some(e), true) => clear_free_space(&mut nodes, input.visible, e),
+        _ => FreeSpaceReport::default(),
+    };
+    let resampled = resample_uniform(&nodes, input.previous.len());
+    if let Some(t) = trace {
+        t.before_resampling = nodes;
+        t.resampled = resampled.clone();
+    }
+    StepOutput {
+        nodes: resampled,
+        visible: input.visible.to_vec(),
+        report: UpeTrackReport {
+            em,
+            upe,
+            length,
+            free_space,
+        },
     }
 }
 

@@ -211,9 +211,31 @@ pub fn estimate_hidden(
     prev: &[Vec3],
     c: &UpeCoefficients,
 ) -> UpeReport {
+    estimate_hidden_with_sweeps(nodes, known, prev, c).0
+}
+
+/// The estimates [`estimate_hidden`] combines for each node: `None` where a
+/// sweep (or the slide) did not place it.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct HiddenSweeps {
+    /// The sweep of increasing index (Eq. 6-11 from the nodes before).
+    pub forward: Vec<Option<Vec3>>,
+    /// The sweep of decreasing index.
+    pub backward: Vec<Option<Vec3>>,
+    /// The slide's displacement estimate (`HiddenMotion::Slide*`).
+    pub slid: Vec<Option<Vec3>>,
+}
+
+/// [`estimate_hidden`], returning also what each sweep estimated.
+pub fn estimate_hidden_with_sweeps(
+    nodes: &mut [Vec3],
+    known: &[bool],
+    prev: &[Vec3],
+    c: &UpeCoefficients,
+) -> (UpeReport, HiddenSweeps) {
     let mut report = UpeReport::default();
     if nodes.len() != known.len() || nodes.len() != prev.len() || known.iter().all(|&k| k) {
-        return report;
+        return (report, HiddenSweeps::default());
     }
     let slid = match c.hidden_motion {
         HiddenMotion::Paper => alloc::vec![None; nodes.len()],
@@ -254,7 +276,12 @@ pub fn estimate_hidden(
             report.swept += 1;
         }
     }
-    report
+    let sweeps = HiddenSweeps {
+        forward: fwd,
+        backward: bwd,
+        slid,
+    };
+    (report, sweeps)
 }
 
 #[cfg(test)]

@@ -86,6 +86,47 @@ pub fn initial_variance(cloud: &[Vec3], nodes: &[Vec3], active: &[bool], min_var
     (sum / (n as f64 * DIM)).clamp(min_variance, cap)
 }
 
+/// The weight of the outlier component in the E-step's denominator (Eq. 4):
+/// `mu = (2 pi sigma^2)^(D/2) w K / ((1 - w) N)` for `K` nodes and `N` points.
+pub fn outlier_term(variance: f64, outlier_weight: f64, nodes: usize, points: usize) -> f64 {
+    libm::pow(core::f64::consts::TAU * variance, DIM / 2.0) * outlier_weight * nodes as f64
+        / ((1.0 - outlier_weight) * points as f64)
+}
+
+/// The responsibilities of the `nodes` for the point `x` (Eq. 4), as
+/// `(node, P(m|x))` for the terms inside the cutoff the registration uses.
+pub fn responsibilities(x: &Vec3, nodes: &[Vec3], variance: f64, mu: f64) -> Vec<(usize, f64)> {
+    let inv_two_var = 0.5 / variance;
+    let mut terms: Vec<(usize, f64)> = nodes
+        .iter()
+        .enumerate()
+        .filter_map(|(m, y)| {
+            let e = (x - y).norm_squared() * inv_two_var;
+            (e < EXPONENT_CUTOFF).then(|| (m, math::exp_neg(e)))
+        })
+        .collect();
+    let denom = mu + terms.iter().map(|t| t.1).sum::<f64>();
+    if !(denom > 0.0) {
+        return Vec::new();
+    }
+    terms.iter_mut().for_each(|t| t.1 /= denom);
+    terms
+}
+
+/// The state at the start of one EM iteration, as [`register_observed`]
+/// reports it.
+#[derive(Debug, Clone, Copy)]
+pub struct EmIteration<'a> {
+    /// 1 for the first iteration.
+    pub iteration: u32,
+    /// `sigma^2` of this iteration's E-step, square metres.
+    pub variance: f64,
+    /// `mu` of this iteration's E-step.
+    pub outlier_term: f64,
+    /// Every node (hidden ones too) before this iteration's M-step.
+    pub nodes: &'a [Vec3],
+}
+
 /// Registers the nodes marked `active` to `cloud` in place (Eq. 4-5).
 ///
 /// E-step: `P(m|x) = exp(-|x - y_m|^2 / 2 sigma^2) / (sum_k exp(...) + mu)`,
@@ -97,6 +138,17 @@ pub fn register(
     nodes: &mut [Vec3],
     active: &[bool],
     settings: &EmSettings,
+) -> EmReport {
+    register_observed(cloud, nodes, active, settings, &mut |_| {})
+}
+
+/// [`register`], telling `observe` the state at the start of every iteration.
+pub fn register_observed(
+    cloud: &[Vec3],
+    nodes: &mut [Vec3],
+    active: &[bool],
+    settings: &EmSettings,
+    observe: &mut dyn FnMut(EmIteration<'_>),
 ) -> EmReport {
     let participating: Vec<bool> = (0..nodes.len())
         .map(|m| active.get(m).copied().unwrap_or(false) && math::is_finite(&nodes[m]))
@@ -112,7 +164,6 @@ pub fn register(
     }
     variance = initial_variance(cloud, nodes, &participating, settings.min_variance);
     let k = idx.len();
-    let n = cloud.len() as f64;
     let w = settings.outlier_weight;
 
     let mut p1 = vec![0.0; k];
@@ -132,8 +183,13 @@ pub fn register(
         px.fill(Vec3::zeros());
         pxx.fill(0.0);
         let inv_two_var = 0.5 / variance;
-        let mu = libm::pow(core::f64::consts::TAU * variance, DIM / 2.0) * w * k as f64
-            / ((1.0 - w) * n);
+        let mu = outlier_term(variance, w, k, cloud.len());
+        observe(EmIteration {
+            iteration: iterations,
+            variance,
+            outlier_term: mu,
+            nodes,
+        });
         debug_assert!(k <= u16::MAX as usize);
         // Candidate nodes per point: those within the cutoff's reach plus a
         // margin when the lists were built. A node left out was farther than

@@ -1,0 +1,72 @@
+//! The explain mode's account of a frame is the frame's own update: the
+//! same nodes, every EM iteration, the hidden nodes left where EM found
+//! them and placed by the sweeps.
+
+use upetrack::{Frame, Params, Tracker};
+use upetrack_synth::{RenderSettings, Scenario, ScenarioKind};
+
+#[test]
+fn an_explained_frame_is_the_update_itself_stage_by_stage() {
+    let mut s = Scenario::new(ScenarioKind::DynamicPull, 30, 2, RenderSettings::default());
+    let camera = s.camera();
+    let mut tracker = Tracker::new(Params::default(), camera, s.hsv()).expect("tracker");
+    let occlusions = s.occlusions.clone();
+    let (mut stepped, mut with_hidden) = (0, 0);
+    while let Some(f) = s.next_frame() {
+        let frame =
+            Frame::new(camera.width, camera.height, &f.rgb, &f.depth, 0.001).expect("frame");
+        let rects: Vec<_> = occlusions
+            .iter()
+            .filter(|o| (o.first..=o.last).contains(&f.index))
+            .map(|o| o.rect)
+            .collect();
+        let obs = tracker.observe(&frame, &rects).expect("observe");
+        let e = tracker.explain(&frame, &obs);
+        let out = tracker.update(&frame, &obs);
+        assert_eq!(e.output.nodes, out.nodes, "frame {}", f.index);
+        assert_eq!(e.output.status, out.status);
+        let Some(step) = &e.step else {
+            assert!(
+                f.index == 0 || e.previous.is_empty(),
+                "frame {} not explained",
+                f.index
+            );
+            continue;
+        };
+        stepped += 1;
+        assert_eq!(step.resampled, out.nodes, "frame {}", f.index);
+        let em = out.em.expect("UPETrack's EM report");
+        assert_eq!(step.em.len(), em.iterations as usize);
+        assert_eq!(
+            step.em[0].nodes, e.previous,
+            "EM starts from the previous nodes"
+        );
+        assert!(step
+            .em
+            .iter()
+            .all(|it| it.variance > 0.0 && it.outlier_term > 0.0));
+        assert_eq!(e.neighbour_counts.len(), e.previous.len());
+        let hidden: Vec<usize> = (0..e.visible.len()).filter(|&m| !e.visible[m]).collect();
+        for &m in &hidden {
+            assert_eq!(
+                step.registered[m], e.previous[m],
+                "EM leaves hidden node {m}"
+            );
+            let placed = step.sweeps.forward[m]
+                .or(step.sweeps.backward[m])
+                .or(step.sweeps.slid[m]);
+            assert!(
+                placed.is_some(),
+                "frame {} hidden node {m} placed by nothing",
+                f.index
+            );
+        }
+        if !hidden.is_empty() {
+            with_hidden += 1;
+        }
+    }
+    assert!(
+        stepped >= 25 && with_hidden >= 10,
+        "{stepped} frames stepped, {with_hidden} with hidden nodes"
+    );
+}
