@@ -14,6 +14,7 @@ import { parseHsvQuery, parseRectsQuery } from './share.js';
 import { checkDlo } from './core.js';
 import { resultJson, dloJson, download } from './export.js';
 import { pageStats } from './plot.js';
+import { explainFrame, moveStep, stepName } from './explain.js';
 
 hooks.opened = async () => {
   const info = state.seq.info;
@@ -72,11 +73,39 @@ stage.ondrop = guarded(async (e) => {
   await openFiles(files, 'dropped');
 });
 
+// ---------- explain mode ----------
+async function openExplain(i, step = null) {
+  state.playing = false;
+  updatePlayButton();
+  $('explain-panel').hidden = false;
+  $('explain').classList.add('active');
+  // A link's step must exist; moving to another frame keeps the nearest step.
+  if (step) await explainFrame(i, step, goTo, true);
+  else await explainFrame(i, stepName(), goTo, false);
+}
+function closeExplain() {
+  state.explain = null;
+  $('explain-panel').hidden = true;
+  $('explain').classList.remove('active');
+  goTo(state.index);
+}
+$('explain').onclick = guarded(() => (state.explain ? closeExplain() : openExplain(state.index)));
+$('explain-close').onclick = () => closeExplain();
+$('explain-back').onclick = () => moveStep(-1);
+$('explain-next').onclick = () => moveStep(1);
+document.addEventListener('keydown', (e) => {
+  if (!state.explain || e.target !== document.body) return;
+  if (e.code === 'ArrowLeft') { e.preventDefault(); moveStep(-1); }
+  if (e.code === 'ArrowRight') { e.preventDefault(); moveStep(1); }
+});
+
 // ---------- transport ----------
-$('play').onclick = () => play();
-$('step').onclick = () => { state.playing = false; goTo(state.index + 1); };
-$('step-back').onclick = () => { state.playing = false; goTo(state.index - 1); };
-$('timeline').oninput = (e) => { state.playing = false; goTo(Number(e.target.value)); };
+$('play').onclick = () => { if (state.explain) closeExplain(); play(); };
+// While explaining, moving to another frame explains that one.
+const moveTo = guarded((i) => (state.explain ? openExplain(Math.max(0, Math.min(state.seq.info.color_files.length - 1, i))) : goTo(i)));
+$('step').onclick = () => { state.playing = false; moveTo(state.index + 1); };
+$('step-back').onclick = () => { state.playing = false; moveTo(state.index - 1); };
+$('timeline').oninput = (e) => { state.playing = false; moveTo(Number(e.target.value)); };
 document.addEventListener('keydown', (e) => { if (e.code === 'Space' && e.target === document.body) { e.preventDefault(); play(); } });
 for (const id of ['show-truth', 'show-mask', 'show-depth']) $(id).onchange = () => goTo(state.index);
 bindPanels();
@@ -123,6 +152,7 @@ async function start() {
     else problems.push(`decode=${query.get('decode')} is not one of ${DECODERS.join(', ')}`);
   }
   if (query.get('algorithm') in ALGORITHM_NAMES) params.algorithm = query.get('algorithm');
+  if (query.get('explain') === 'upe') params.algorithm = 'upetrack';
   if (query.get('compare') in ALGORITHM_NAMES) state.compare = query.get('compare');
   $('algorithm').value = params.algorithm;
   $('compare').value = state.compare;
@@ -160,6 +190,14 @@ async function start() {
   if (hsv) { setHsvInputs(hsv); await applyHsv(hsv); }
   for (const rect of rects) {
     try { await addRect(rect); } catch (err) { showError(err.message); }
+  }
+  // A deep link into the explain mode: ?explain=upe&frame=N&step=S.
+  if (query.has('explain')) {
+    if (query.get('explain') !== 'upe') throw new Error(`explain=${query.get('explain')}: the explain mode shows UPETrack's step (explain=upe)`);
+    const frame = query.has('frame') ? Number(query.get('frame')) : 0;
+    if (!Number.isInteger(frame)) throw new Error(`frame=${query.get('frame')} is not a frame number`);
+    await openExplain(frame, query.get('step'));
+    return;
   }
   if (query.get('autoplay') !== '0') play();
 }

@@ -8,6 +8,7 @@ import { requestFrame } from './sequence.js';
 import { draw } from './draw.js';
 import { updateLabels, drawPlot, updateStatsPanel, STATS_WINDOW } from './plot.js';
 import { projectPoints } from './core.js';
+import { showStep } from './explain.js';
 
 // Frames requested ahead of the shown one while playing.
 export const LOOKAHEAD = 2;
@@ -19,7 +20,7 @@ export function updatePlayButton() { $('play').textContent = state.playing ? 'Pa
 
 // Draws the shown frame with its labels and the plot.
 export function render() {
-  draw();
+  if (state.explain && state.explain.index === state.index) showStep(); else draw();
   state.shownAt.push(performance.now());
   if (state.shownAt.length > STATS_WINDOW) state.shownAt.shift();
   updateLabels();

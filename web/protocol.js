@@ -18,6 +18,8 @@
 //            occlusions, groundtruth, wantMask, wantDepth,      trackMs, totalMs, error, second, snapshot,
 //            decoder ('browser' | 'wasm')
 //                                                               mask], [depth (RGBA ramp)] }
+// explain    the frame's fields (as frame), snapshot (of the      { view (wasm's ExplainView), rgba, width, height }
+//            frame before, or null)
 
 export const Request = {
   defaults: () => ({ type: 'defaults' }),
@@ -29,6 +31,7 @@ export const Request = {
   zip: (bytes, name) => ({ type: 'zip', bytes, name }),
   zipRead: (path) => ({ type: 'zipRead', path }),
   recording: (file, name, dlo) => ({ type: 'recording', file, name, dlo }),
+  explain: (f, snapshot) => ({ ...Request.frame(f), type: 'explain', snapshot }),
   frame: (f) => ({
     type: 'frame', index: f.index, track: f.track, color: f.color, depth: f.depth,
     colorName: f.colorName, depthName: f.depthName, fromZip: f.fromZip,

@@ -159,8 +159,8 @@ function readPair(i) {
   return hit && hit.seq === state.seq ? hit.p : readBoth(state.seq, i);
 }
 
-// Decodes (and, with `track`, tracks) frame i in the worker.
-export async function requestFrame(i, track) {
+// The fields of a frame request for frame i, and the buffers to transfer.
+export async function frameFields(i, track) {
   const seq = state.seq;
   const info = seq.info;
   let color = null;
@@ -172,10 +172,17 @@ export async function requestFrame(i, track) {
     // Read the next frame's files while this one is decoded and tracked.
     if (i + 1 < info.color_files.length) prefetch(i + 1);
   }
-  return call(Request.frame({
+  const fields = {
     index: i, track, color, depth, colorName: info.color_files[i], depthName: info.depth_files[i],
     fromZip: seq.fromZip, fromRecording: seq.fromRecording, depthScale: info.depth_scale, occlusions: activeRects(i),
     groundtruth: info.groundtruth[i], wantMask: $('show-mask').checked, wantDepth: $('show-depth').checked,
     decoder: state.decoder,
-  }), transfer);
+  };
+  return [fields, transfer];
+}
+
+// Decodes (and, with `track`, tracks) frame i in the worker.
+export async function requestFrame(i, track) {
+  const [fields, transfer] = await frameFields(i, track);
+  return call(Request.frame(fields), transfer);
 }

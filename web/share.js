@@ -16,6 +16,11 @@ export function shareLink() {
   const own = state.seq && state.seq.info.hsv;
   if (state.hsv && own && JSON.stringify(state.hsv) !== JSON.stringify(own)) q.set('hsv', [...state.hsv.lower, ...state.hsv.upper].join(','));
   if (state.userRects.length) q.set('rects', state.userRects.map((r) => r.join(',')).join(';'));
+  if (state.explain) {
+    q.set('explain', 'upe');
+    q.set('frame', String(state.explain.index));
+    q.set('step', state.explain.steps[state.explain.at].name);
+  }
   q.set('autoplay', '0');
   const url = new URL(location.href);
   url.search = q.toString();

@@ -17,6 +17,7 @@ let second = null;          // the tracker of the compared algorithm, if any
 let secondAlgorithm = null;
 let archive = null;
 let recording = null;
+let opened = null;          // { camera, hsv } of the trackers, for the explain mode's own tracker
 
 // Parameters checked by the core, as the command checks a --params file.
 const checked = (params) => parseParams(JSON.stringify(params));
@@ -164,6 +165,7 @@ const handlers = {
     if (second) second.free();
     const params = checked(m.params);
     tracker = new WasmTracker({ camera: m.camera, params, hsv: m.hsv });
+    opened = { camera: m.camera, hsv: m.hsv };
     secondAlgorithm = m.compare || null;
     second = secondAlgorithm
       ? new WasmTracker({ camera: m.camera, params: { ...params, algorithm: secondAlgorithm }, hsv: m.hsv })
@@ -178,7 +180,25 @@ const handlers = {
   },
   hsv: (m) => {
     for (const t of [tracker, second]) if (t) t.setHsv(m.hsv);
+    if (opened) opened.hsv = m.hsv;
     return {};
+  },
+  // One frame explained from the state after the frame before it (its
+  // snapshot), by a tracker of its own: the main one is not touched.
+  explain: async (m, early) => {
+    if (!opened) throw new Error('no sequence is open');
+    const [f] = await decode(m, early);
+    const t = new WasmTracker({ camera: opened.camera, params: tracker.params(), hsv: opened.hsv });
+    try {
+      t.restore(m.snapshot);
+      const view = t.explain(f, m.depthScale, new Float64Array(m.occlusions));
+      const mask = t.lastMask();
+      const rgba = f.rgba;
+      return [{ view, rgba: rgba.buffer, mask: mask.buffer, width: f.width, height: f.height }, [rgba.buffer, mask.buffer]];
+    } finally {
+      t.free();
+      f.free();
+    }
   },
   restore: (m) => {
     tracker.restore(m.snapshot ? m.snapshot.main : null);
@@ -193,7 +213,7 @@ const handlers = {
 let queue = Promise.resolve();
 onmessage = (e) => {
   const m = e.data;
-  const early = m.type === 'frame' ? startDecode(m) : null;
+  const early = m.type === 'frame' || m.type === 'explain' ? startDecode(m) : null;
   queue = queue.then(() => serve(m, early));
 };
 

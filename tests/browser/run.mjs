@@ -388,6 +388,82 @@ await test('the parameter panel edits every algorithm\'s parameters; reset resto
   await bad.close();
 });
 
+// A hash of the canvas's pixels, to tell drawings apart.
+const canvasHash = (page) => page.evaluate(() => {
+  const c = document.getElementById('canvas');
+  const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+  let h = 0;
+  for (let k = 0; k < d.length; k += 7) h = (h * 31 + d[k]) >>> 0;
+  return h;
+});
+
+await test('explain mode: a deep link opens at its step; steps change the drawing and the text; the steps are the frame\'s own update', async () => {
+  const page = await newPage('?sample=dynamic-pull&explain=upe&frame=12&step=em-2');
+  const first = await page.evaluate(() => {
+    const e = window.upetrack.state.explain;
+    return { index: e.index, step: e.steps[e.at].name, names: e.steps.map((s) => s.name), title: document.getElementById('explain-title').textContent,
+      text: document.getElementById('explain-text').textContent, out: Array.from(e.view.output_px), tracked: Array.from(window.upetrack.state.results[12].nodesPx),
+      em: e.view.em.length, iterations: e.view.em.map((it) => it.line_point.length) };
+  });
+  assert(first.index === 12 && first.step === 'em-2' && /EM iteration 2 of \d+ \(Eq\. 1-5\)/.test(first.title) && /σ² = [0-9.]+ mm²/.test(first.text), `opened at: ${JSON.stringify(first).slice(0, 300)}`);
+  const want = ['segmentation', 'cloud', 'visibility', ...Array.from({ length: first.em }, (_, k) => `em-${k + 1}`), 'upe', 'resampling'];
+  assert(first.names.join() === want.join(), `steps: ${first.names}`);
+  assert(first.iterations.every((n) => n > 100), `responsibility lines per iteration: ${first.iterations}`);
+  const worst = Math.max(...first.out.map((c, k) => Math.abs(c - first.tracked[k])));
+  assert(first.out.length === 48 && worst === 0, `explained nodes differ from the tracked frame's by ${worst} px`);
+  await page.screenshot({ path: path.join(artifacts, 'explain-em.png') });
+  // Back to the first step, then forward through every one.
+  for (let k = 0; k < 4; k++) await page.click('#explain-back');
+  assert(await page.evaluate(() => document.getElementById('explain-back').disabled), 'back at the first step');
+  const seen = new Set([await canvasHash(page)]);
+  const texts = new Set([await page.evaluate(() => document.getElementById('explain-title').textContent + document.getElementById('explain-text').textContent)]);
+  for (let k = 0; k < want.length - 1; k++) {
+    await page.click('#explain-next');
+    seen.add(await canvasHash(page));
+    texts.add(await page.evaluate(() => document.getElementById('explain-title').textContent + document.getElementById('explain-text').textContent));
+  }
+  const last = await page.evaluate(() => ({ step: window.upetrack.state.explain.steps[window.upetrack.state.explain.at].name, next: document.getElementById('explain-next').disabled }));
+  assert(last.step === 'resampling' && last.next, `after stepping forward: ${JSON.stringify(last)}`);
+  assert(seen.size === want.length && texts.size === want.length, `${seen.size} drawings and ${texts.size} texts over ${want.length} steps`);
+  await page.screenshot({ path: path.join(artifacts, 'explain-resampling.png') });
+  await page.click('#explain-back');
+  await page.click('#explain-back');
+  const upe = await page.evaluate(() => window.upetrack.state.explain.steps[window.upetrack.state.explain.at].name);
+  assert(upe === first.names[first.names.length - 3], `two steps back: ${upe}`);
+  // The link of the step shown opens it again.
+  await page.click('#share-link');
+  const link = await page.evaluate(() => document.getElementById('share-url').value);
+  assert(/explain=upe/.test(link) && /frame=12/.test(link) && new RegExp(`step=${upe}`).test(link), link);
+  // Another frame keeps the step.
+  await page.click('#step');
+  await page.waitForFunction(() => window.upetrack.state.explain && window.upetrack.state.explain.index === 13, null, { timeout: 30000 });
+  assert(await page.evaluate(() => window.upetrack.state.explain.steps[window.upetrack.state.explain.at].name) === upe, 'step kept on the next frame');
+  await page.close();
+  // Segmentation and the visibility test, for the docs; a step the frame lacks is named.
+  const seg = await newPage('?sample=dynamic-pull&explain=upe&frame=20&step=visibility');
+  await seg.screenshot({ path: path.join(artifacts, 'explain-visibility.png') });
+  await seg.close();
+  const bad = await newPage('?explain=upe&frame=3&step=em-99', { errors: true });
+  const m = await messageOf(bad);
+  assert(m.includes('step=em-99: frame 3 has the steps segmentation, cloud, visibility, em-1'), m);
+  await bad.close();
+});
+
+await test('a shared link carries the colour range and drawn occlusions', async () => {
+  const page = await newPage('?autoplay=0&hsv=100,120,20,130,255,255&rects=10,10,50,40;100,100,20,20');
+  const r = await page.evaluate(() => ({ hsv: window.upetrack.state.hsv, rects: window.upetrack.state.userRects, h: document.getElementById('h-lo').value }));
+  assert(JSON.stringify(r.hsv) === JSON.stringify({ lower: [100, 120, 20], upper: [130, 255, 255] }) && r.h === '100', `hsv: ${JSON.stringify(r)}`);
+  assert(JSON.stringify(r.rects) === '[[10,10,50,40],[100,100,20,20]]', `rects: ${JSON.stringify(r.rects)}`);
+  await page.click('#share-link');
+  const link = await page.evaluate(() => document.getElementById('share-url').value);
+  assert(link.includes('hsv=100%2C120%2C20%2C130%2C255%2C255') && link.includes('rects=10%2C10%2C50%2C40%3B100%2C100%2C20%2C20'), link);
+  await page.close();
+  const bad = await newPage('?autoplay=0&hsv=1,2,3&rects=1,2,3', { errors: true });
+  const m = await messageOf(bad);
+  assert(m.includes('hsv=1,2,3: give six whole numbers'), m);
+  await bad.close();
+});
+
 // What the command says about a bad value, without its file name.
 function nativeMessage(args) {
   try { execFileSync(native, args, { stdio: 'pipe' }); } catch (e) { return String(e.stderr); }

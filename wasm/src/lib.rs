@@ -14,6 +14,7 @@ use upetrack_io::source::{MemorySource, Source};
 use wasm_bindgen::prelude::*;
 
 mod browser;
+mod explain;
 mod recording;
 
 fn js_err(e: impl std::fmt::Display) -> JsError {

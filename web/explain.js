@@ -1,0 +1,212 @@
+// The explain mode: one frame's update shown stage by stage over the image,
+// each with a short text and the paper's equations: the segmented pixels,
+// the point cloud, the visibility test, every EM iteration with its
+// responsibilities, the occlusion estimate's sweeps, and the resampling.
+// The worker explains the frame from the tracker's state before it (the
+// core's Tracker::explain: the frame's own update, stage by stage).
+import { state, $ } from './state.js';
+import { call } from './worker-client.js';
+import { Request } from './protocol.js';
+import { frameFields, activeRects } from './sequence.js';
+import { canvas, ctx, MAIN_COLOURS } from './draw.js';
+
+const fmt = (x, d = 1) => (Number.isFinite(x) ? x.toFixed(d) : '-');
+const COLOURS = { cloud: '#00e0ff', visible: '#30d050', hidden: '#ffa000', forward: '#00c8ff', backward: '#ff4fd8', slid: '#ffe000', line: '255,255,255' };
+
+// The steps of a frame's explanation, each { name, title, text, draw }.
+function steps(v) {
+  const p = state.params;
+  const mm = (m) => fmt(m * 1000, 1);
+  const out = [
+    {
+      name: 'segmentation', title: 'Segmentation',
+      text: `${v.mask_pixels} pixels have a colour inside the HSV range (H ${state.hsv.lower[0]}-${state.hsv.upper[0]}, S ${state.hsv.lower[1]}-${state.hsv.upper[1]}, V ${state.hsv.lower[2]}-${state.hsv.upper[2]}, OpenCV's 8-bit HSV). Occlusion rectangles are blacked out first, so nothing under them is seen (Sec. III-A).`,
+      draw: drawMask,
+    },
+    {
+      name: 'cloud', title: 'Point cloud X^t',
+      text: `${v.deprojected_points} of them have a valid depth and are deprojected to 3D; a ${mm(p.voxel_size)} mm voxel grid keeps one centroid per cube: ${v.cloud_px.length / 2} points, each pushed π/4 of the rope's radius away from the camera, from the rope's surface to its axis.`,
+      draw: () => { dim(); dots(v.cloud_px, COLOURS.cloud, 2); },
+    },
+  ];
+  if (!v.previous_px.length) {
+    out.push({
+      name: 'initialisation', title: 'Initialisation',
+      text: `There is no previous state (status: ${v.status}): the nodes are laid along the centre line of the largest blob of the mask, ${p.node_count} nodes at equal spacing.`,
+      draw: () => { dim(); dots(v.cloud_px, COLOURS.cloud, 1.5); nodes(v.output_px, MAIN_COLOURS.visible); },
+    });
+    return out;
+  }
+  const seen = v.visible.filter(Boolean).length;
+  out.push({
+    name: 'visibility', title: 'Visibility (Fig. 3)',
+    text: `A node of the previous frame is visible when at least V_lim = ${v.visibility_min_points} cloud points lie within r_vis = ${mm(p.visibility_radius)} mm of it (circles; the number is q), and at least ${fmt(p.visibility_min_fraction, 2)} of the visible nodes' median q (this project's addition; 0 gives the paper's rule). ${seen} of ${v.visible.length} are visible (green), ${v.visible.length - seen} hidden (orange).`,
+    draw: () => {
+      dim();
+      dots(v.cloud_px, COLOURS.cloud, 1.5);
+      for (let m = 0; m < v.visible.length; m++) {
+        const [u, w] = [v.previous_px[2 * m], v.previous_px[2 * m + 1]];
+        const colour = v.visible[m] ? COLOURS.visible : COLOURS.hidden;
+        ctx.strokeStyle = colour; ctx.lineWidth = 1.5;
+        ctx.beginPath(); ctx.arc(u, w, v.radius_px[m], 0, 2 * Math.PI); ctx.stroke();
+        ctx.fillStyle = colour; ctx.beginPath(); ctx.arc(u, w, 3, 0, 2 * Math.PI); ctx.fill();
+        label(String(v.counts[m]), u + 5, w - 5, colour);
+      }
+    },
+  });
+  v.em.forEach((it, k) => {
+    const next = k + 1 < v.em.length ? v.em[k + 1].nodes_px : v.registered_px;
+    out.push({
+      name: `em-${k + 1}`, title: `EM iteration ${k + 1} of ${v.em.length} (Eq. 1-5)`,
+      text: `E-step (Eq. 4): each point is shared among the visible nodes by its posterior P(m|x), drawn as lines (brighter: larger; below ${0.05} not drawn), with a uniform outlier term of weight w = ${fmt(p.outlier_weight, 2)} (μ in Eq. 4). M-step (Eq. 5): each visible node moves to the weighted mean of its points (small dots: where it goes), and σ² is re-estimated: σ² = ${fmt(it.variance_mm2, 2)} mm² in this iteration. Hidden nodes take no part.`,
+      draw: () => {
+        dim();
+        for (let j = 0; j < it.line_point.length; j++) {
+          const i = it.line_point[j], m = it.line_node[j];
+          ctx.strokeStyle = `rgba(${COLOURS.line},${Math.min(1, 0.15 + it.line_p[j]).toFixed(2)})`;
+          ctx.lineWidth = 1;
+          ctx.beginPath(); ctx.moveTo(v.cloud_px[2 * i], v.cloud_px[2 * i + 1]); ctx.lineTo(it.nodes_px[2 * m], it.nodes_px[2 * m + 1]); ctx.stroke();
+        }
+        dots(v.cloud_px, COLOURS.cloud, 1.5);
+        nodes(it.nodes_px, MAIN_COLOURS.visible, v.visible);
+        dots(next, '#ffffff', 1.5);
+      },
+    });
+  });
+  const hidden = v.visible.length - seen;
+  const ends = v.end_runs.filter(Boolean).length;
+  out.push({
+    name: 'upe', title: 'Occlusion estimate: UPE (Eq. 6-11)',
+    text: hidden
+      ? `Each hidden node (hollow: where it was) is placed from the three known nodes before it in the sweep's direction: their displacements decayed by γ = ${fmt(p.displacement_decay, 2)} (Eq. 6-7) give one estimate, the last two known nodes extended by b = ${fmt(p.bending_resistance, 2)} times the old spacing with a = ${fmt(p.curvature_retention, 2)} of the old bend (Eq. 8-10) another; α = ${fmt(p.displacement_weight, 2)} blends them (Eq. 11). The sweep forward (cyan) and backward (magenta) both reach a run in the middle, which takes their mean; ${ends ? `${ends} node${ends > 1 ? 's' : ''} of a run at an end of the rope use α_end = ${fmt(p.end_displacement_weight, 2)}${p.hidden_motion !== 'paper' ? ' and slide along the rope (yellow)' : ''}` : 'no run reaches an end of the rope'}. Orange: the result.`
+      : 'Every node is visible in this frame: there is nothing to estimate.',
+    draw: () => {
+      dim();
+      dots(v.cloud_px, COLOURS.cloud, 1);
+      polyline(v.estimated_px, 'rgba(255,255,255,0.6)');
+      for (let m = 0; m < v.visible.length; m++) {
+        if (v.visible[m]) continue;
+        const [u0, w0] = [v.previous_px[2 * m], v.previous_px[2 * m + 1]];
+        const [u1, w1] = [v.estimated_px[2 * m], v.estimated_px[2 * m + 1]];
+        ctx.strokeStyle = COLOURS.hidden; ctx.lineWidth = 1.5;
+        ctx.beginPath(); ctx.arc(u0, w0, 4, 0, 2 * Math.PI); ctx.stroke();
+        arrow(u0, w0, u1, w1, COLOURS.hidden);
+        for (const [arr, colour] of [[v.forward_px, COLOURS.forward], [v.backward_px, COLOURS.backward], [v.slid_px, COLOURS.slid]]) {
+          if (Number.isFinite(arr[2 * m])) { ctx.fillStyle = colour; ctx.fillRect(arr[2 * m] - 2, arr[2 * m + 1] - 2, 4, 4); }
+        }
+      }
+      nodes(v.estimated_px, MAIN_COLOURS.visible, v.visible, COLOURS.hidden);
+    },
+  });
+  out.push({
+    name: 'resampling', title: 'Resampling (Eq. 12-15)',
+    text: `The nodes are moved along the polyline they form to equal geodesic spacing l = L/(M−1) (Eq. 12-15): L = ${fmt(v.length_before_mm, 1)} mm before (thin line), ${fmt(v.length_after_mm, 1)} mm after. These are the frame's nodes.`,
+    draw: () => {
+      dim();
+      polyline(v.before_resampling_px, 'rgba(255,255,255,0.5)');
+      dots(v.before_resampling_px, '#ffffff', 2);
+      polyline(v.resampled_px, MAIN_COLOURS.line);
+      nodes(v.resampled_px, MAIN_COLOURS.visible, v.visible, MAIN_COLOURS.hidden);
+    },
+  });
+  return out;
+}
+
+// ---------- drawing ----------
+// The frame as the tracker saw it: occlusion rectangles blacked out.
+function background() {
+  const f = state.explain.frame;
+  ctx.putImageData(new ImageData(f.rgba, f.width, f.height), 0, 0);
+  ctx.fillStyle = 'rgba(0,0,0,0.85)';
+  const r = activeRects(state.explain.index);
+  for (let k = 0; k < r.length; k += 4) ctx.fillRect(r[k], r[k + 1], r[k + 2], r[k + 3]);
+}
+function dim() { background(); ctx.fillStyle = 'rgba(0,0,0,0.45)'; ctx.fillRect(0, 0, canvas.width, canvas.height); }
+function drawMask() {
+  background();
+  const f = state.explain.frame;
+  const img = ctx.getImageData(0, 0, f.width, f.height);
+  for (let k = 0; k < f.mask.length; k++) if (f.mask[k]) { img.data[4 * k] = 255; img.data[4 * k + 1] >>= 2; img.data[4 * k + 2] >>= 2; }
+  ctx.putImageData(img, 0, 0);
+}
+function dots(px, colour, r) {
+  ctx.fillStyle = colour;
+  for (let k = 0; k < px.length; k += 2) if (Number.isFinite(px[k])) ctx.fillRect(px[k] - r, px[k + 1] - r, 2 * r, 2 * r);
+}
+function polyline(px, colour) {
+  ctx.strokeStyle = colour; ctx.lineWidth = 2; ctx.beginPath();
+  let open = false;
+  for (let k = 0; k < px.length; k += 2) {
+    if (!Number.isFinite(px[k])) { open = false; continue; }
+    if (open) ctx.lineTo(px[k], px[k + 1]); else ctx.moveTo(px[k], px[k + 1]);
+    open = true;
+  }
+  ctx.stroke();
+}
+function nodes(px, colour, visible = null, hiddenColour = COLOURS.hidden) {
+  for (let m = 0; m < px.length / 2; m++) {
+    if (!Number.isFinite(px[2 * m])) continue;
+    ctx.fillStyle = !visible || visible[m] ? colour : hiddenColour;
+    ctx.beginPath(); ctx.arc(px[2 * m], px[2 * m + 1], 4, 0, 2 * Math.PI); ctx.fill();
+  }
+}
+function arrow(x0, y0, x1, y1, colour) {
+  if (![x0, y0, x1, y1].every(Number.isFinite)) return;
+  ctx.strokeStyle = colour; ctx.lineWidth = 1.5;
+  ctx.beginPath(); ctx.moveTo(x0, y0); ctx.lineTo(x1, y1); ctx.stroke();
+  const a = Math.atan2(y1 - y0, x1 - x0);
+  ctx.beginPath(); ctx.moveTo(x1, y1);
+  ctx.lineTo(x1 - 6 * Math.cos(a - 0.4), y1 - 6 * Math.sin(a - 0.4));
+  ctx.lineTo(x1 - 6 * Math.cos(a + 0.4), y1 - 6 * Math.sin(a + 0.4));
+  ctx.closePath(); ctx.fillStyle = colour; ctx.fill();
+}
+function label(text, x, y, colour) {
+  ctx.font = '10px sans-serif'; ctx.fillStyle = 'rgba(0,0,0,0.6)';
+  ctx.fillRect(x - 1, y - 9, ctx.measureText(text).width + 2, 11);
+  ctx.fillStyle = colour; ctx.fillText(text, x, y);
+}
+
+// ---------- the mode ----------
+// Explains frame i (tracking the frames before it first) and shows the step
+// named `name` (or the first).
+// `strict`: a `name` the frame lacks is an error; otherwise the nearest
+// step is taken (the last EM iteration for a later one).
+export async function explainFrame(i, name, goTo, strict) {
+  const n = state.seq.info.color_files.length;
+  if (!(i >= 0 && i < n)) throw new Error(`frame ${i} is not in this sequence (frames 0 to ${n - 1})`);
+  await goTo(i);
+  const snapshot = i > 0 ? state.results[i - 1].snapshot.main : null;
+  const [fields, transfer] = await frameFields(i, false);
+  const r = await call(Request.explain(fields, snapshot), transfer);
+  const list = steps(r.view);
+  let at = list.findIndex((s) => s.name === name);
+  if (at < 0 && name && strict) throw new Error(`step=${name}: frame ${i} has the steps ${list.map((s) => s.name).join(', ')}`);
+  if (at < 0) at = name && name.startsWith('em-') ? list.map((s) => s.name.startsWith('em-')).lastIndexOf(true) : 0;
+  at = Math.max(0, at);
+  state.explain = {
+    index: i, steps: list, at, view: r.view,
+    frame: { width: r.width, height: r.height, rgba: new Uint8ClampedArray(r.rgba), mask: new Uint8Array(r.mask) },
+  };
+  showStep();
+}
+
+export function showStep() {
+  const e = state.explain;
+  if (!e) return;
+  const s = e.steps[e.at];
+  s.draw();
+  $('explain-title').textContent = `Frame ${e.index}, step ${e.at + 1} of ${e.steps.length}: ${s.title}`;
+  $('explain-text').textContent = s.text;
+  $('explain-back').disabled = e.at === 0;
+  $('explain-next').disabled = e.at === e.steps.length - 1;
+}
+
+export function moveStep(by) {
+  const e = state.explain;
+  if (!e) return;
+  e.at = Math.max(0, Math.min(e.steps.length - 1, e.at + by));
+  showStep();
+}
+
+// The step shown, as a link's `step=` value.
+export const stepName = () => (state.explain ? state.explain.steps[state.explain.at].name : null);
