@@ -15,6 +15,7 @@ import { checkDlo } from './core.js';
 import { resultJson, dloJson, download } from './export.js';
 import { pageStats } from './plot.js';
 import { explainFrame, moveStep, stepName } from './explain.js';
+import { bindScenePanel, makeLongLook } from './scenes.js';
 
 hooks.opened = async () => {
   const info = state.seq.info;
@@ -145,6 +146,7 @@ function applySpeed(text) {
 async function start() {
   await coreReady;
   buildParamPanel();
+  bindScenePanel();
   const { params } = await call(Request.defaults());
   const problems = applyParamsQuery(query, params);
   if (query.has('decode')) {
@@ -183,7 +185,7 @@ async function start() {
   const select = $('sample');
   for (const s of index.samples) select.append(new Option(s.name, s.name));
   select.onchange = guarded(() => loadSample(select.value, index));
-  const first = query.get('sample') || (index.samples.find((s) => s.name === 'static-s') || index.samples[0]).name;
+  const first = query.get('sample') || (index.samples.find((s) => s.name === 'dynamic-pull') || index.samples[0]).name;
   select.value = first;
   await loadSample(first, index);
   // A shared link's colour range and drawn occlusions, over the sample's own.
@@ -200,6 +202,13 @@ async function start() {
     return;
   }
   if (query.get('autoplay') !== '0') play();
+  // The opening look: a page opened as it is (no sample, no settings)
+  // loops its sample and makes a longer scene meanwhile.
+  if (query.has('loop')) $('loop').checked = query.get('loop') === '1';
+  else if (!query.has('sample') && !query.has('autoplay')) $('loop').checked = true;
+  if (!query.has('sample') && !query.has('autoplay') && query.get('long') !== '0') {
+    makeLongLook(first, play).catch((err) => showError(`The longer scene could not be made: ${err.message}`));
+  }
 }
 
 // Hooks for the browser tests and for scripting the page.

@@ -96,9 +96,10 @@ export async function play() {
   updatePlayButton();
   while (state.playing) {
     const n = state.seq.info.color_files.length;
-    if (state.index >= n - 1) { state.playing = false; break; }
+    const wrap = state.index >= n - 1;
+    if (wrap && !$('loop').checked) { state.playing = false; break; }
     const t0 = performance.now();
-    await goTo(state.index + 1);
+    await goTo(wrap ? 0 : state.index + 1);
     const period = 1000 / (state.seq.info.fps * Number($('speed').value));
     const wait = period - (performance.now() - t0);
     if (wait > 0) await new Promise((r) => setTimeout(r, wait));

@@ -72,6 +72,15 @@ export async function loadSample(name, index) {
   $('sample').value = name;
 }
 
+// A scene made in the tab: `files` maps each path to its bytes.
+export async function openGenerated(name, files) {
+  const read = async (p) => {
+    if (!(p in files)) throw new Error(`${name}/${p}: missing`);
+    return files[p].slice(0); // a copy: the one sent to the worker is transferred
+  };
+  return openSequence(name, Object.keys(files), read);
+}
+
 // Files from a folder picker or a drop ({ path, file }): the folders above
 // the sequence's layout are stripped (the core's rule).
 export async function openFiles(files, label) {

@@ -21,6 +21,7 @@ export const state = {
   truthPx: null,      // ground truth of the shown frame in pixels
   mode: 'none',       // 'draw' | 'pick'
   explain: null,      // the explain mode: { index, steps, at, view, frame }, or null
+  longLook: null,     // { ms } once the opening look's longer scene is made
   shownAt: [],        // display timestamps, for the frame rate
   generation: 0,      // bumped when a new sequence opens
   epoch: 0,           // bumped when settings change; a look-ahead from an older epoch is dropped

@@ -3,11 +3,7 @@
 use std::path::Path;
 use std::time::Instant;
 
-use upetrack_io::sequence::{
-    DloConfig, GroundTruthFile, GroundTruthFrame, IntrinsicsFile, OcclusionConfig,
-    SegmentationConfig,
-};
-use upetrack_io::write::{encode_depth_png, encode_jpeg, write_file, write_json, JPEG_QUALITY};
+use upetrack_io::write::write_file;
 use upetrack_synth::variant::D435I_1280X720;
 use upetrack_synth::{Scenario, ScenarioKind, Variant};
 
@@ -31,52 +27,11 @@ pub fn list_scenarios() {
 }
 
 /// Writes `scenario` into `dir`; returns the number of frames written.
-pub fn write_scenario(mut scenario: Scenario, dir: &Path) -> Result<usize, CliError> {
-    let camera = scenario.camera();
-    write_json(
-        &dir.join("camera_intrinsic.json"),
-        &IntrinsicsFile::from_camera(&camera),
-    )?;
-    let hsv = scenario.hsv();
-    let dlo = DloConfig {
-        depth_scale: Some(0.001),
-        fps: Some(30.0),
-        segmentation: Some(SegmentationConfig {
-            hsv_lower: hsv.lower,
-            hsv_upper: hsv.upper,
-        }),
-        occlusions: scenario
-            .occlusions
-            .iter()
-            .map(|o| OcclusionConfig {
-                frames: [o.first as u64, o.last as u64],
-                rect: [o.rect.x, o.rect.y, o.rect.w, o.rect.h],
-            })
-            .collect(),
-        groundtruth: Some("groundtruth.json".into()),
-    };
-    write_json(&dir.join("dlo.json"), &dlo)?;
-    let mut gt = GroundTruthFile::default();
-    let mut count = 0;
-    while let Some(f) = scenario.next_frame() {
-        let name = format!("{:06}", f.index);
-        let jpg = encode_jpeg(camera.width, camera.height, &f.rgb, JPEG_QUALITY)?;
-        write_file(&dir.join("color").join(format!("{name}.jpg")), &jpg)?;
-        let png = encode_depth_png(camera.width, camera.height, &f.depth)?;
-        write_file(&dir.join("depth").join(format!("{name}.png")), &png)?;
-        gt.frames.push(GroundTruthFrame {
-            frame: f.index,
-            points: f.groundtruth.iter().map(|p| [p.x, p.y, p.z]).collect(),
-            occluded: if f.occluded.iter().any(|&o| o) {
-                f.occluded.clone()
-            } else {
-                Vec::new()
-            },
-        });
-        count += 1;
-    }
-    write_json(&dir.join("groundtruth.json"), &gt)?;
-    Ok(count)
+pub fn write_scenario(scenario: Scenario, dir: &Path) -> Result<usize, CliError> {
+    Ok(upetrack_io::synthetic::write_scenario(
+        scenario,
+        &mut |(path, bytes)| write_file(&dir.join(path), &bytes),
+    )?)
 }
 
 /// `upetrack synth <scenario> <dir> [--frames N] [--seed S] [--hd] [--variant V]`.

@@ -19,6 +19,7 @@ pub mod result;
 pub mod run;
 pub mod sequence;
 pub mod source;
+pub mod synthetic;
 pub mod write;
 
 pub use error::SequenceError;

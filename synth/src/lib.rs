@@ -16,5 +16,5 @@ pub mod variant;
 
 pub use render::{RenderSettings, Rendered};
 pub use rope::{Rope, RopeSettings};
-pub use scenario::{Scenario, ScenarioKind, SynthFrame, SIMULATOR_VERSION};
+pub use scenario::{Scenario, ScenarioKind, SceneKnobs, SynthFrame, SIMULATOR_VERSION};
 pub use variant::Variant;

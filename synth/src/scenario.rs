@@ -201,6 +201,31 @@ struct MovingBox {
     path: BoxPath,
 }
 
+/// Scales applied to a scenario's events, for scenes made to order (the
+/// page's generator). The default, 1 and 1, is the scenario as named, bit
+/// for bit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SceneKnobs {
+    /// Size of the occlusion rectangle and of the occluder boxes (across
+    /// the view; a box keeps its height), times the scenario's.
+    pub occluder_scale: f64,
+    /// Distance every pull moves its end over the same frames (so also its
+    /// speed), times the scenario's; 0 leaves the rope where it settled.
+    pub pull_scale: f64,
+}
+
+impl Default for SceneKnobs {
+    fn default() -> Self {
+        Self {
+            occluder_scale: 1.0,
+            pull_scale: 1.0,
+        }
+    }
+}
+
+/// Largest scale a [`SceneKnobs`] field accepts (the page clamps to it).
+pub const MAX_KNOB_SCALE: f64 = 3.0;
+
 /// A scenario being recorded.
 pub struct Scenario {
     /// Which one.
@@ -266,6 +291,25 @@ impl Scenario {
         seed: u64,
         render: RenderSettings,
         rope_settings: RopeSettings,
+    ) -> Self {
+        Self::with_knobs(
+            kind,
+            frames,
+            seed,
+            render,
+            rope_settings,
+            SceneKnobs::default(),
+        )
+    }
+
+    /// [`Scenario::with_rope`] with the occluders and pulls scaled by `knobs`.
+    pub fn with_knobs(
+        kind: ScenarioKind,
+        frames: usize,
+        seed: u64,
+        render: RenderSettings,
+        rope_settings: RopeSettings,
+        knobs: SceneKnobs,
     ) -> Self {
         let frames = frames.clamp(1, MAX_FRAMES);
         let mut rng = SplitMix64::new(seed);
@@ -435,6 +479,19 @@ impl Scenario {
                 });
             }
         }
+        for p in &mut pulls {
+            p.offset *= knobs.pull_scale;
+        }
+        if knobs.occluder_scale != 1.0 {
+            for b in &mut boxes {
+                let c = (b.shape.min + b.shape.max) * 0.5;
+                let half = (b.shape.max - b.shape.min) * (0.5 * knobs.occluder_scale);
+                b.shape.min.x = c.x - half.x;
+                b.shape.min.y = c.y - half.y;
+                b.shape.max.x = c.x + half.x;
+                b.shape.max.y = c.y + half.y;
+            }
+        }
         let mut occlusions = Vec::new();
         if let Some((i0, i1)) = hidden {
             let cam = render.camera;
@@ -448,6 +505,14 @@ impl Scenario {
                 }
             }
             let m = OCCLUSION_MARGIN_PX;
+            if knobs.occluder_scale != 1.0 {
+                let (cu, cv) = (0.5 * (u0 + u1), 0.5 * (v0 + v1));
+                let (hu, hv) = (
+                    0.5 * (u1 - u0) * knobs.occluder_scale,
+                    0.5 * (v1 - v0) * knobs.occluder_scale,
+                );
+                (u0, u1, v0, v1) = (cu - hu, cu + hu, cv - hv, cv + hv);
+            }
             occlusions.push(SynthOcclusion {
                 first: at(0.3),
                 last: frames - 1,
@@ -634,6 +699,63 @@ mod tests {
             Some(ScenarioKind::OcclusionSweep { percent: 70 })
         );
         assert_eq!(ScenarioKind::parse("nope"), None);
+    }
+
+    #[test]
+    fn knobs_scale_the_occluder_and_the_pull_and_leave_the_default_alone() {
+        let make = |knobs| {
+            Scenario::with_knobs(
+                ScenarioKind::DynamicPull,
+                20,
+                2,
+                RenderSettings::default(),
+                RopeSettings::default(),
+                knobs,
+            )
+        };
+        let mut plain = Scenario::new(ScenarioKind::DynamicPull, 20, 2, RenderSettings::default());
+        let mut same = make(SceneKnobs::default());
+        for _ in 0..3 {
+            let (a, b) = (
+                plain.next_frame().expect("frame"),
+                same.next_frame().expect("frame"),
+            );
+            assert!(a.rgb == b.rgb && a.depth == b.depth && a.groundtruth == b.groundtruth);
+        }
+        let rect = |s: &Scenario| s.occlusions[0].rect;
+        let base = rect(&plain);
+        let big = rect(&make(SceneKnobs {
+            occluder_scale: 2.0,
+            ..SceneKnobs::default()
+        }));
+        assert!(
+            big.w > 2 * base.w - 3 * OCCLUSION_MARGIN_PX as i64 && big.h > base.h,
+            "{base:?} {big:?}"
+        );
+        let tip = |knobs| {
+            let mut s = make(knobs);
+            let mut last = Vec3::zeros();
+            while let Some(f) = s.next_frame() {
+                last = f.groundtruth[f.groundtruth.len() - 1];
+            }
+            last
+        };
+        let still = tip(SceneKnobs {
+            pull_scale: 0.0,
+            ..SceneKnobs::default()
+        });
+        let pulled = tip(SceneKnobs::default());
+        let farther = tip(SceneKnobs {
+            pull_scale: 2.0,
+            ..SceneKnobs::default()
+        });
+        let moved = |p: Vec3| (p - still).norm();
+        assert!(
+            moved(pulled) > 0.08 && moved(farther) > 1.6 * moved(pulled),
+            "{} {}",
+            moved(pulled),
+            moved(farther)
+        );
     }
 
     #[test]

@@ -47,7 +47,11 @@ const requests = [];
 // console errors are allowed.
 const expecting = new WeakSet();
 function expectErrors(page) { expecting.add(page); }
-async function newPage(query = '', { errors = false } = {}) {
+// Tests open the static-s sample unless they name one (the page's own
+// default, dynamic-pull, with its longer scene made in the tab, is the
+// opening-look test's: `plain`).
+async function newPage(query = '', { errors = false, plain = false } = {}) {
+  if (!plain && !/[?&]sample=/.test(query)) query = query ? `${query}&sample=static-s` : '?sample=static-s';
   const page = await context.newPage();
   if (errors) expectErrors(page);
   page.on('console', (m) => { if (m.type() === 'error' && !expecting.has(page)) consoleErrors.push(m.text()); });
@@ -72,7 +76,7 @@ const native = path.join(root, 'target/release/upetrack');
 const nativeJson = path.join(tmp, 'native.json');
 execFileSync(native, ['track', path.join(root, 'samples/static-s'), '--out', nativeJson]);
 
-await test('page loads, default sample plays, nodes lie on the rope', async () => {
+await test('page loads, a sample plays, nodes lie on the rope', async () => {
   const page = await newPage('?autoplay=1');
   await page.waitForFunction(() => window.upetrack.state.tracked >= 6, null, { timeout: 60000 });
   const s = await page.evaluate(() => window.upetrack.state.results.slice(0, 7).map((r) => r.error));
@@ -462,6 +466,49 @@ await test('a shared link carries the colour range and drawn occlusions', async 
   const m = await messageOf(bad);
   assert(m.includes('hsv=1,2,3: give six whole numbers'), m);
   await bad.close();
+});
+
+await test('the opening look: the page as it is loops its sample, makes a 150-frame scene in the tab and plays it on', async () => {
+  const page = await newPage('', { plain: true });
+  const start = await page.evaluate(() => ({ name: window.upetrack.state.seq.name, loop: document.getElementById('loop').checked, playing: window.upetrack.state.playing }));
+  assert(start.name === 'dynamic-pull' && start.loop && start.playing, `opened on: ${JSON.stringify(start)}`);
+  // The 25 frames loop while the longer scene is made.
+  await page.waitForFunction(() => window.upetrack.state.index === 0 && window.upetrack.state.tracked === 24, null, { timeout: 60000, polling: 20 });
+  await page.waitForFunction(() => window.upetrack.state.seq.info.color_files.length === 150, null, { timeout: 180000 });
+  const ms = await page.evaluate(() => window.upetrack.state.longLook.ms);
+  console.log(`     benchmark: the 150-frame scene was made in the tab in ${(ms / 1000).toFixed(1)} s (${(ms / 150).toFixed(0)} ms a frame) while the sample looped`);
+  await page.waitForFunction(() => window.upetrack.state.tracked >= 60 && window.upetrack.state.playing, null, { timeout: 60000 });
+  const r = await page.evaluate(() => ({ name: window.upetrack.state.seq.name, errs: window.upetrack.state.results.slice(0, 60).map((x) => x.error[0]), occ: window.upetrack.state.seq.info.occlusions }));
+  const mean = r.errs.reduce((a, b) => a + b, 0) / r.errs.length;
+  console.log(`     ${r.name}: mean error over frames 0-59 ${mean.toFixed(2)} mm`);
+  assert(r.name === 'dynamic-pull (seed 2)' && r.occ.length === 1 && mean < 6, `${JSON.stringify(r.name)}, mean ${mean}`);
+  await page.close();
+});
+
+await test('a scene made in the tab has its ground truth and tracks as the command\'s synth of it does', async () => {
+  const dir = path.join(tmp, 'made-tip-drag');
+  execFileSync(native, ['synth', 'tip-drag', dir, '--frames', '20', '--seed', '5', '--variant', 'near-thin-green']);
+  const out = path.join(tmp, 'made-tip-drag.json');
+  execFileSync(native, ['track', dir, '--out', out]);
+  const ref = JSON.parse(fs.readFileSync(out, 'utf8'));
+  const page = await newPage('?autoplay=0');
+  const r = await page.evaluate(async () => {
+    const u = window.upetrack;
+    document.getElementById('scene-panel').open = true;
+    document.getElementById('scene-scenario').value = 'tip-drag';
+    document.getElementById('scene-variant').value = 'near-thin-green';
+    document.getElementById('scene-frames').value = '20';
+    document.getElementById('scene-seed').value = '5';
+    document.getElementById('scene-make').click();
+    while (!u.state.seq || u.state.seq.name !== 'tip-drag (seed 5)') await new Promise((res) => setTimeout(res, 50));
+    const result = await u.trackAll();
+    return { frames: result.frames.map((f) => f.nodes), gt: u.state.seq.info.groundtruth.filter(Boolean).length, w: u.state.seq.info.camera.width };
+  });
+  let worst = 0;
+  ref.frames.forEach((f, k) => f.nodes.forEach((p, j) => p.forEach((c, d) => { worst = Math.max(worst, Math.abs(c - r.frames[k][j][d])); })));
+  assert(r.frames.length === 20 && r.gt === 20 && worst === 0, `made in the tab: ${r.frames.length} frames, ${r.gt} with ground truth, ${worst} m from the command's`);
+  await page.screenshot({ path: path.join(artifacts, 'scene.png') });
+  await page.close();
 });
 
 // What the command says about a bad value, without its file name.

@@ -16,6 +16,7 @@ use wasm_bindgen::prelude::*;
 mod browser;
 mod explain;
 mod recording;
+mod scene;
 
 fn js_err(e: impl std::fmt::Display) -> JsError {
     JsError::new(&e.to_string())

@@ -1,0 +1,136 @@
+//! A synthetic scenario (`upetrack_synth`) written as the contract's
+//! sequence files, one frame at a time, to wherever the caller keeps them:
+//! a folder for `upetrack synth`, memory for the page's scene generator.
+
+use upetrack_synth::Scenario;
+
+use crate::error::SequenceError;
+use crate::sequence::{
+    DloConfig, GroundTruthFile, GroundTruthFrame, IntrinsicsFile, OcclusionConfig,
+    SegmentationConfig,
+};
+use crate::write::{encode_depth_png, encode_jpeg, JPEG_QUALITY};
+
+/// Frames per second of every synthetic sequence.
+pub const SYNTHETIC_FPS: f64 = 30.0;
+
+/// Depth units of every synthetic sequence, metres.
+pub const SYNTHETIC_DEPTH_SCALE: f64 = 0.001;
+
+/// One file of a sequence: its path inside the folder and its bytes.
+pub type SequenceFile = (String, Vec<u8>);
+
+fn json<T: serde::Serialize>(path: &str, value: &T) -> Result<SequenceFile, SequenceError> {
+    let text = serde_json::to_string_pretty(value).map_err(|e| SequenceError::Json {
+        path: path.to_string(),
+        message: e.to_string(),
+    })?;
+    Ok((path.to_string(), text.into_bytes()))
+}
+
+/// Writes a scenario's files in order: [`SyntheticWriter::header`], then
+/// [`SyntheticWriter::next_frame`] until it gives `None`, then
+/// [`SyntheticWriter::groundtruth`].
+pub struct SyntheticWriter {
+    scenario: Scenario,
+    groundtruth: GroundTruthFile,
+}
+
+impl SyntheticWriter {
+    /// A writer of `scenario`'s frames.
+    pub fn new(scenario: Scenario) -> Self {
+        Self {
+            scenario,
+            groundtruth: GroundTruthFile::default(),
+        }
+    }
+
+    /// The scenario being written.
+    pub fn scenario(&self) -> &Scenario {
+        &self.scenario
+    }
+
+    /// `camera_intrinsic.json` and `dlo.json` (colour range, occlusion
+    /// rectangles, depth scale, fps, the ground truth's file name).
+    pub fn header(&self) -> Result<Vec<SequenceFile>, SequenceError> {
+        let s = &self.scenario;
+        let hsv = s.hsv();
+        let dlo = DloConfig {
+            depth_scale: Some(SYNTHETIC_DEPTH_SCALE),
+            fps: Some(SYNTHETIC_FPS),
+            segmentation: Some(SegmentationConfig {
+                hsv_lower: hsv.lower,
+                hsv_upper: hsv.upper,
+            }),
+            occlusions: s
+                .occlusions
+                .iter()
+                .map(|o| OcclusionConfig {
+                    frames: [o.first as u64, o.last as u64],
+                    rect: [o.rect.x, o.rect.y, o.rect.w, o.rect.h],
+                })
+                .collect(),
+            groundtruth: Some("groundtruth.json".into()),
+        };
+        Ok(vec![
+            json(
+                "camera_intrinsic.json",
+                &IntrinsicsFile::from_camera(&s.camera()),
+            )?,
+            json("dlo.json", &dlo)?,
+        ])
+    }
+
+    /// Simulates and renders the next frame: its colour JPEG and depth PNG,
+    /// or `None` after the last frame.
+    pub fn next_frame(&mut self) -> Result<Option<[SequenceFile; 2]>, SequenceError> {
+        let camera = self.scenario.camera();
+        let Some(f) = self.scenario.next_frame() else {
+            return Ok(None);
+        };
+        let name = format!("{:06}", f.index);
+        let jpg = encode_jpeg(camera.width, camera.height, &f.rgb, JPEG_QUALITY)?;
+        let png = encode_depth_png(camera.width, camera.height, &f.depth)?;
+        self.groundtruth.frames.push(GroundTruthFrame {
+            frame: f.index,
+            points: f.groundtruth.iter().map(|p| [p.x, p.y, p.z]).collect(),
+            occluded: if f.occluded.iter().any(|&o| o) {
+                f.occluded
+            } else {
+                Vec::new()
+            },
+        });
+        Ok(Some([
+            (format!("color/{name}.jpg"), jpg),
+            (format!("depth/{name}.png"), png),
+        ]))
+    }
+
+    /// `groundtruth.json` of the frames written so far.
+    pub fn groundtruth(&self) -> Result<SequenceFile, SequenceError> {
+        json("groundtruth.json", &self.groundtruth)
+    }
+
+    /// Frames written so far.
+    pub fn written(&self) -> usize {
+        self.groundtruth.frames.len()
+    }
+}
+
+/// Writes every file of `scenario` through `put`; returns the frame count.
+pub fn write_scenario(
+    scenario: Scenario,
+    put: &mut dyn FnMut(SequenceFile) -> Result<(), SequenceError>,
+) -> Result<usize, SequenceError> {
+    let mut w = SyntheticWriter::new(scenario);
+    for f in w.header()? {
+        put(f)?;
+    }
+    while let Some(files) = w.next_frame()? {
+        for f in files {
+            put(f)?;
+        }
+    }
+    put(w.groundtruth()?)?;
+    Ok(w.written())
+}
