@@ -16,6 +16,7 @@ import { resultJson, dloJson, download } from './export.js';
 import { pageStats } from './plot.js';
 import { explainFrame, moveStep, stepName } from './explain.js';
 import { bindScenePanel, makeLongLook } from './scenes.js';
+import { startWebcam, stopWebcam } from './webcam.js';
 
 hooks.opened = async () => {
   const info = state.seq.info;
@@ -38,6 +39,15 @@ hooks.opened = async () => {
     showNote('Click the rope to take its colour; save the setup with "Save dlo.json".');
   }
 };
+
+hooks.closing = stopWebcam;
+$('webcam').onclick = guarded(() => startWebcam((hsv) => {
+  updatePlayButton();
+  renderRects();
+  setHsvInputs(hsv);
+  setMode('pick', true);
+  $('seq-details').textContent = '';
+}));
 
 $('message-close').onclick = () => { $('message').hidden = true; };
 

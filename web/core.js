@@ -2,8 +2,8 @@
 // statistics, folder roots, checking settings), called through the same
 // WebAssembly module the worker tracks with: the JS keeps none of them.
 import init, {
-  projectPoints, rgbToHsv, hsvRangeAround, errorStats, commonRoot, checkDlo, parseParams, parameterSchema, defaultParams, sceneChoices,
+  projectPoints, rgbToHsv, hsvRangeAround, errorStats, commonRoot, checkDlo, parseParams, parameterSchema, defaultParams, sceneChoices, colourOnlySetup,
 } from './pkg/upetrack_wasm.js';
 
 export const ready = init();
-export { projectPoints, rgbToHsv, hsvRangeAround, errorStats, commonRoot, checkDlo, parseParams, parameterSchema, defaultParams, sceneChoices };
+export { projectPoints, rgbToHsv, hsvRangeAround, errorStats, commonRoot, checkDlo, parseParams, parameterSchema, defaultParams, sceneChoices, colourOnlySetup };

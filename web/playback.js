@@ -38,7 +38,8 @@ export function goTo(i) {
   return state.busy;
 }
 
-function keep(r) {
+// What the page keeps of a frame's reply.
+export function keep(r) {
   return {
     nodes: r.nodes, nodesPx: r.nodesPx, visible: r.visible, status: r.status, reason: r.reason,
     segmentMs: r.segmentMs, cloudMs: r.cloudMs, trackMs: r.trackMs, totalMs: r.totalMs, decodeMs: r.decodeMs,
@@ -48,7 +49,7 @@ function keep(r) {
 }
 
 async function goToNow(i) {
-  if (!state.seq) return;
+  if (!state.seq || state.seq.live) return;
   const n = state.seq.info.color_files.length;
   i = Math.max(0, Math.min(n - 1, i));
   const generation = state.generation;
@@ -91,7 +92,7 @@ async function goToNow(i) {
 }
 
 export async function play() {
-  if (!state.seq) return;
+  if (!state.seq || state.seq.live) return;
   state.playing = !state.playing;
   updatePlayButton();
   while (state.playing) {

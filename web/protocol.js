@@ -16,7 +16,7 @@
 // frame      index, track, color, depth, colorName,          { index, width, height, decodeMs, rgba,
 //            depthName, fromZip, fromRecording, depthScale,    [nodes, nodesPx, visible, status, reason, segmentMs, cloudMs,
 //            occlusions, groundtruth, wantMask, wantDepth,      trackMs, totalMs, error, second, snapshot,
-//            decoder ('browser' | 'wasm')
+//            decoder ('browser' | 'wasm'), or bitmap (a webcam's ImageBitmap, transferred) instead of files
 //                                                               mask], [depth (RGBA ramp)] }
 // explain    the frame's fields (as frame), snapshot (of the      { view (wasm's ExplainView), rgba, width, height }
 //            frame before, or null)
@@ -37,6 +37,6 @@ export const Request = {
     colorName: f.colorName, depthName: f.depthName, fromZip: f.fromZip,
     fromRecording: f.fromRecording, depthScale: f.depthScale,
     occlusions: f.occlusions, groundtruth: f.groundtruth, wantMask: f.wantMask, wantDepth: f.wantDepth,
-    decoder: f.decoder,
+    decoder: f.decoder, bitmap: f.bitmap,
   }),
 };

@@ -6,7 +6,7 @@ import { Request } from './protocol.js';
 import { commonRoot } from './core.js';
 
 // Set by app.js: what happens once a sequence is open (show frame 0).
-export const hooks = { opened: async () => {} };
+export const hooks = { opened: async () => {}, closing: () => {} };
 
 async function openSequence(name, paths, read, fromZip = false) {
   const generation = ++state.generation;
@@ -43,6 +43,7 @@ export async function openRecording(file, dloFile) {
 
 async function finishOpening(generation, seq) {
   const { info } = seq;
+  hooks.closing();
   await settleLookahead();
   await call(Request.open(info.camera, state.params, info.hsv, state.compare));
   if (generation !== state.generation) return;

@@ -7,7 +7,7 @@
 // always takes the createImageBitmap route. Requests and
 // replies are those of protocol.js.
 import init, {
-  WasmTracker, decodeFrame, decodeBitmapFrame, decodeRgbaFrame, Archive, Recording, readSequenceInfo, defaultParams, parseParams, depthRgba,
+  WasmTracker, decodeFrame, decodeBitmapFrame, decodeRgbaFrame, colourOnlyFrame, Archive, Recording, readSequenceInfo, defaultParams, parseParams, depthRgba,
 } from './pkg/upetrack_wasm.js';
 import { Request } from './protocol.js';
 
@@ -79,6 +79,17 @@ function startDecode(m) {
   return p;
 }
 
+// A webcam's frame (an ImageBitmap, transferred), read back through an
+// OffscreenCanvas; its depth is constant (colourOnlyFrame).
+function colourOnly(bitmap) {
+  const t0 = performance.now();
+  try {
+    return [colourOnlyFrame(bitmap), performance.now() - t0];
+  } finally {
+    bitmap.close();
+  }
+}
+
 // Frame m.index decoded, and the milliseconds its decoding took.
 async function decode(m, early) {
   if (m.fromRecording) {
@@ -115,7 +126,7 @@ async function decode(m, early) {
 }
 
 async function frame(m, early) {
-  const [f, decodeMs] = await decode(m, early);
+  const [f, decodeMs] = m.bitmap ? colourOnly(m.bitmap) : await decode(m, early);
   const rgba = f.rgba;
   const out = { index: m.index, width: f.width, height: f.height, decodeMs, rgba: rgba.buffer };
   const transfer = [rgba.buffer];

@@ -23,7 +23,7 @@ USAGE:
   upetrack track <sequence> --out <result.json> [--algorithm A] [--params <params.json>]
   upetrack eval <sequence>... [--algorithm A,B,..] [--params <params.json>] [--json <out.json>] [--markdown <out.md>] [--per-frame <out.csv>]
   upetrack compare [--data <dir>] [--frames N] [--json <out.json>] [--markdown <out.md>] [--update <page.md>]
-  upetrack synth <scenario> <dir> [--frames N] [--seed S] [--hd] [--variant V]
+  upetrack synth <scenario> <dir> [--frames N] [--seed S] [--hd] [--variant V] [--y4m <video.y4m>]
   upetrack bench [<sequence>...] [--frames N] [--repeat R] [--algorithm A,B,..]
   upetrack overlay <sequence> <result.json> <frame> <out.png> [--depth]
   upetrack info <recording> [--json] [--color-topic T] [--depth-topic T]

@@ -3,7 +3,7 @@
 use std::path::Path;
 use std::time::Instant;
 
-use upetrack_io::write::write_file;
+use upetrack_io::write::{write_file, y4m_frame, y4m_header};
 use upetrack_synth::variant::D435I_1280X720;
 use upetrack_synth::{Scenario, ScenarioKind, Variant};
 
@@ -34,9 +34,24 @@ pub fn write_scenario(scenario: Scenario, dir: &Path) -> Result<usize, CliError>
     )?)
 }
 
-/// `upetrack synth <scenario> <dir> [--frames N] [--seed S] [--hd] [--variant V]`.
+/// Writes `scenario`'s colour frames as a `.y4m` video (a fake camera's
+/// input); returns the number of frames written.
+fn write_video(mut scenario: Scenario, path: &Path) -> Result<usize, CliError> {
+    let camera = scenario.camera();
+    let fps = upetrack_io::synthetic::SYNTHETIC_FPS as u32;
+    let mut out = y4m_header(camera.width, camera.height, fps);
+    let mut n = 0;
+    while let Some(f) = scenario.next_frame() {
+        out.extend(y4m_frame(camera.width, camera.height, &f.rgb)?);
+        n += 1;
+    }
+    write_file(path, &out)?;
+    Ok(n)
+}
+
+/// `upetrack synth <scenario> <dir> [--frames N] [--seed S] [--hd] [--variant V] [--y4m <video.y4m>]`.
 pub fn cmd_synth(raw: &[String]) -> Result<(), CliError> {
-    let args = Args::parse(raw, &["hd"], &["frames", "seed", "variant"])?;
+    let args = Args::parse(raw, &["hd"], &["frames", "seed", "variant", "y4m"])?;
     let [name, dir] = args.positional.as_slice() else {
         return Err(CliError(format!(
             "synth takes a scenario and a folder\n\n{USAGE}"
@@ -69,6 +84,14 @@ pub fn cmd_synth(raw: &[String]) -> Result<(), CliError> {
     }
     let start = Instant::now();
     let scenario = Scenario::with_rope(kind, frames, seed, render, variant.rope());
+    if let Some(video) = args.value("y4m") {
+        let again = Scenario::with_rope(kind, frames, seed, render, variant.rope());
+        let n = write_video(again, Path::new(video))?;
+        eprintln!(
+            "{video}: {n} colour frames of {} as a .y4m video",
+            kind.name()
+        );
+    }
     let n = write_scenario(scenario, Path::new(dir))?;
     eprintln!(
         "{}: {n} frames of {} written in {:.1} s",

@@ -77,6 +77,64 @@ pub fn encode_depth_png(width: u32, height: u32, depth: &[u16]) -> Result<Vec<u8
     )
 }
 
+/// The header of a YUV4MPEG2 video (`.y4m`) of 4:2:0 frames, full-range
+/// BT.601 (`C420jpeg`): what Chromium's fake camera plays
+/// (`--use-file-for-fake-video-capture`).
+pub fn y4m_header(width: u32, height: u32, fps: u32) -> Vec<u8> {
+    format!("YUV4MPEG2 W{width} H{height} F{fps}:1 Ip A1:1 C420jpeg\n").into_bytes()
+}
+
+/// One RGB8 frame of a `.y4m` video: `FRAME`, the Y plane, then U and V
+/// averaged over each 2x2 block (JPEG's full-range BT.601 conversion).
+/// `width` and `height` must be even.
+pub fn y4m_frame(width: u32, height: u32, rgb: &[u8]) -> Result<Vec<u8>, SequenceError> {
+    let (w, h) = (width as usize, height as usize);
+    if w % 2 != 0 || h % 2 != 0 || rgb.len() != 3 * w * h {
+        return Err(SequenceError::invalid(
+            "y4m",
+            format!(
+                "{width}x{height} RGB8 with even sides needed, got {} bytes",
+                rgb.len()
+            ),
+        ));
+    }
+    let px = |i: usize| {
+        (
+            rgb[3 * i] as f64,
+            rgb[3 * i + 1] as f64,
+            rgb[3 * i + 2] as f64,
+        )
+    };
+    let byte = |v: f64| v.round().clamp(0.0, 255.0) as u8;
+    let mut out = Vec::with_capacity(6 + w * h * 3 / 2);
+    out.extend_from_slice(b"FRAME\n");
+    out.extend((0..w * h).map(|i| {
+        let (r, g, b) = px(i);
+        byte(0.299 * r + 0.587 * g + 0.114 * b)
+    }));
+    let (mut u, mut v) = (Vec::with_capacity(w * h / 4), Vec::with_capacity(w * h / 4));
+    for y in (0..h).step_by(2) {
+        for x in (0..w).step_by(2) {
+            let (mut cb, mut cr) = (0.0, 0.0);
+            for i in [
+                y * w + x,
+                y * w + x + 1,
+                (y + 1) * w + x,
+                (y + 1) * w + x + 1,
+            ] {
+                let (r, g, b) = px(i);
+                cb += 128.0 - 0.168_736 * r - 0.331_264 * g + 0.5 * b;
+                cr += 128.0 + 0.5 * r - 0.418_688 * g - 0.081_312 * b;
+            }
+            u.push(byte(cb / 4.0));
+            v.push(byte(cr / 4.0));
+        }
+    }
+    out.extend(u);
+    out.extend(v);
+    Ok(out)
+}
+
 /// Writes `bytes` to `path`, creating parent folders.
 pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), SequenceError> {
     if let Some(parent) = path.parent() {

@@ -633,6 +633,53 @@ await test('embed=1 shows the image and the transport only', async () => {
   await page.close();
 });
 
+await test('webcam mode: Chromium\'s fake camera plays a synthetic rope; a click picks its colour; the nodes follow it in the image', async () => {
+  const dir = path.join(tmp, 'fakecam');
+  const video = path.join(tmp, 'fakecam.y4m');
+  execFileSync(native, ['synth', 'static-s', dir, '--frames', '30', '--seed', '1', '--y4m', video]);
+  const gt = JSON.parse(fs.readFileSync(path.join(dir, 'groundtruth.json'), 'utf8')).frames[0].points;
+  const cam = JSON.parse(fs.readFileSync(path.join(dir, 'camera_intrinsic.json'), 'utf8'));
+  const fx = cam.fx ?? cam.intrinsic_matrix?.[0];
+  const ctx2 = await chromium.launchPersistentContext(fs.mkdtempSync(path.join(tmp, 'profile-cam-')), {
+    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
+    headless: true,
+    args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
+      '--disable-background-networking', '--disable-component-update', '--disable-sync',
+      '--use-fake-ui-for-media-stream', '--use-fake-device-for-media-stream', `--use-file-for-fake-video-capture=${video}`],
+    viewport: { width: 1280, height: 900 },
+  });
+  const page = await ctx2.newPage();
+  const errors = [];
+  page.on('pageerror', (e) => errors.push(String(e)));
+  await page.goto(`${origin}/web/index.html?sample=static-s&autoplay=0`);
+  await page.evaluate(() => window.upetrack.ready);
+  await page.click('#webcam');
+  await page.waitForFunction(() => window.upetrack.state.webcam && window.upetrack.state.webcam.frames >= 5, null, { timeout: 60000 });
+  // Click on the rope: the first ground-truth point, projected.
+  const [X, Y, Z] = gt[20];
+  const u = Math.round(615 * X / Z + 320), v = Math.round(615 * Y / Z + 240);
+  const picked = await page.evaluate(async ([x, y]) => { await window.upetrack.pickAt(x, y); return window.upetrack.state.hsv; }, [u, v]);
+  const start = await page.evaluate(() => window.upetrack.state.webcam.frames);
+  await page.waitForFunction((n) => window.upetrack.state.webcam.frames >= n + 20, start, { timeout: 60000 });
+  const r = await page.evaluate(() => {
+    const s = window.upetrack.state;
+    const res = s.results[s.index];
+    return { px: Array.from(res.nodesPx), status: res.status, w: s.frame.width, h: s.frame.height, stats: window.upetrack.stats };
+  });
+  // Each node's distance to the ground truth's centre line in the image.
+  const line = gt.map(([x, y, z]) => [615 * x / z + 320, 615 * y / z + 240]);
+  const seg = (p, a, b) => { const [dx, dy] = [b[0] - a[0], b[1] - a[1]]; const t = Math.max(0, Math.min(1, ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / (dx * dx + dy * dy))); return Math.hypot(p[0] - a[0] - t * dx, p[1] - a[1] - t * dy); };
+  const dists = [];
+  for (let k = 0; k < r.px.length; k += 2) dists.push(Math.min(...line.slice(1).map((b, j) => seg([r.px[k], r.px[k + 1]], line[j], b))));
+  const mean = dists.reduce((a, b) => a + b, 0) / dists.length;
+  console.log(`     fake camera ${r.w}x${r.h}: picked ${JSON.stringify(picked)}; ${r.px.length / 2} nodes, mean ${mean.toFixed(2)} px from the ground truth's line, worst ${Math.max(...dists).toFixed(2)} px; ${r.stats.fps.toFixed(0)} frames/s`);
+  assert(fx === undefined || Math.abs(fx - 615) < 1e-9, `the synthetic camera's fx is ${fx}`);
+  assert(r.w === 640 && r.h === 480 && r.status === 'tracked' && mean < 3 && Math.max(...dists) < 8, `webcam nodes: ${JSON.stringify({ mean, status: r.status })}`);
+  assert(errors.length === 0, `page errors: ${errors}`);
+  await page.screenshot({ path: path.join(artifacts, 'webcam.png') });
+  await ctx2.close();
+});
+
 await test('no console errors and no request leaves the origin', async () => {
   const outside = requests.filter((u) => !u.startsWith(origin) && !u.startsWith('blob:') && !u.startsWith('data:'));
   assert(outside.length === 0, `requests outside the origin: ${outside.slice(0, 5)}`);

@@ -106,3 +106,55 @@ pub fn decode_bitmap_frame(
     let d = decode_depth(depth, depth_name).map_err(js_err)?;
     DecodedFrame::from_rgba(width, height, rgba, d, color_name, depth_name)
 }
+
+/// Depth given to every pixel of a colour-only frame (a webcam's), metres:
+/// the table distance of the bundled scenes, so that lengths in pixels, and
+/// with them the default parameters, mean what they mean there.
+pub const COLOUR_ONLY_DEPTH_M: f64 = 0.6;
+
+/// Depth units of a colour-only frame, metres.
+const COLOUR_ONLY_DEPTH_SCALE: f64 = 0.001;
+
+/// Focal length of a colour-only camera at 640 pixels wide (the D435i's
+/// colour camera), pixels; it scales with the width.
+const COLOUR_ONLY_FOCAL_AT_640: f64 = 615.0;
+
+/// The camera assumed for a colour-only stream of `width` x `height`
+/// pixels, with the depth units of its frames: `{camera: {width, height,
+/// fx, fy, cx, cy}, depth_scale}`; the D435i's colour field of view.
+#[wasm_bindgen(js_name = colourOnlySetup)]
+pub fn colour_only_setup(width: u32, height: u32) -> Result<JsValue, JsError> {
+    #[derive(serde::Serialize)]
+    struct Setup {
+        camera: upetrack::CameraIntrinsics,
+        depth_scale: f64,
+    }
+    let f = COLOUR_ONLY_FOCAL_AT_640 * f64::from(width) / 640.0;
+    crate::to_js(&Setup {
+        camera: upetrack::CameraIntrinsics {
+            width,
+            height,
+            fx: f,
+            fy: f,
+            cx: f64::from(width) / 2.0,
+            cy: f64::from(height) / 2.0,
+        },
+        depth_scale: COLOUR_ONLY_DEPTH_SCALE,
+    })
+}
+
+/// A colour-only frame (a webcam's `ImageBitmap`) as a frame to track: the
+/// depth of every pixel is [`COLOUR_ONLY_DEPTH_M`] (in units of 1 mm), so
+/// the rope is tracked on a plane, that is, in the image.
+#[wasm_bindgen(js_name = colourOnlyFrame)]
+pub fn colour_only_frame(bitmap: &ImageBitmap) -> Result<DecodedFrame, JsError> {
+    let (width, height, rgba) =
+        bitmap_rgba(bitmap).map_err(|e| JsError::new(&format!("camera frame: {e}")))?;
+    let units = (COLOUR_ONLY_DEPTH_M / COLOUR_ONLY_DEPTH_SCALE).round() as u16;
+    let depth = upetrack_io::decode::DepthImage {
+        width,
+        height,
+        data: vec![units; width as usize * height as usize],
+    };
+    DecodedFrame::from_rgba(width, height, rgba, depth, "camera frame", "camera frame")
+}
