@@ -151,3 +151,34 @@ pub fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<(), Seq
     })?;
     write_file(path, text.as_bytes())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// JPEG's full-range BT.601: white is (255, 128, 128), pure red
+    /// (76, 85, 255), pure blue (29, 255, 107); chroma is the mean of each
+    /// 2x2 block, laid out after the whole Y plane.
+    #[test]
+    fn y4m_frames_hold_full_range_bt601_planes() {
+        let (w, h) = (4u32, 2u32);
+        let mut rgb = Vec::new();
+        for _ in 0..h {
+            rgb.extend_from_slice(&[255, 255, 255, 255, 255, 255, 255, 0, 0, 0, 0, 255]);
+        }
+        let f = y4m_frame(w, h, &rgb).expect("frame");
+        assert_eq!(&f[..6], b"FRAME\n");
+        assert_eq!(&f[6..14], &[255, 255, 76, 29, 255, 255, 76, 29]);
+        // Block 0 is white; block 1 averages red and blue.
+        let (u, v) = (&f[14..16], &f[16..18]);
+        assert_eq!((u[0], v[0]), (128, 128));
+        assert_eq!((u[1], v[1]), (170, 181));
+        assert_eq!(f.len(), 6 + 8 + 2 + 2);
+        assert!(y4m_frame(3, 2, &[0; 18]).is_err());
+        assert!(y4m_frame(4, 2, &[0; 5]).is_err());
+        assert_eq!(
+            y4m_header(640, 480, 30),
+            b"YUV4MPEG2 W640 H480 F30:1 Ip A1:1 C420jpeg\n"
+        );
+    }
+}

@@ -381,7 +381,7 @@ await test('the parameter panel edits every algorithm\'s parameters; reset resto
   });
   const defaults = await page2.evaluate(() => import('./pkg/upetrack_wasm.js').then((w) => w.defaultParams()));
   assert(JSON.stringify(reset.params) === JSON.stringify(defaults) && reset.beta === '0.1', `after reset: ${JSON.stringify(reset).slice(0, 200)}`);
-  await page.screenshot({ path: path.join(artifacts, 'parameters.png'), fullPage: true });
+  await page.locator('aside').screenshot({ path: path.join(artifacts, 'parameters.png') });
   await page.close();
   await page2.close();
   // A link with a bad parameter names it and keeps the default.
@@ -686,6 +686,33 @@ await test('no console errors and no request leaves the origin', async () => {
   const real = consoleErrors.filter((e) => !/Failed to load resource: the server responded with a status of 404/.test(e) || !e);
   assert(real.length === 0, `console errors: ${real.slice(0, 5).join(' | ')}`);
 });
+
+// DOCS_SCREENSHOTS=1 copies the screenshots of each mode into docs/images/.
+const DOC_SHOTS = ['page.png', 'compare.png', 'parameters.png', 'explain-visibility.png', 'explain-em.png',
+  'explain-resampling.png', 'scene.png', 'webcam.png'];
+// They are made smaller on the way (at most 960 px wide, JPEG) by the browser.
+if (process.env.DOCS_SCREENSHOTS && !only && !failed) {
+  const docs = path.join(root, 'docs/images');
+  fs.mkdirSync(docs, { recursive: true });
+  const page = await context.newPage();
+  for (const f of DOC_SHOTS) {
+    const png = fs.readFileSync(path.join(artifacts, f)).toString('base64');
+    const jpeg = await page.evaluate(async (data) => {
+      const img = new Image();
+      img.src = `data:image/png;base64,${data}`;
+      await img.decode();
+      const scale = Math.min(1, 960 / img.width);
+      const c = document.createElement('canvas');
+      c.width = Math.round(img.width * scale);
+      c.height = Math.round(img.height * scale);
+      c.getContext('2d').drawImage(img, 0, 0, c.width, c.height);
+      return c.toDataURL('image/jpeg', 0.82).split(',')[1];
+    }, png);
+    fs.writeFileSync(path.join(docs, f.replace(/\.png$/, '.jpg')), Buffer.from(jpeg, 'base64'));
+  }
+  await page.close();
+  console.log(`screenshots written to ${docs}`);
+}
 
 await context.close();
 server.close();

@@ -324,10 +324,16 @@ pub fn segment(frame: &Frame<'_>, range: &HsvRange, occlusions: &[Rect]) -> Mask
         *ok = range.contains([h as u8, range.lower[1], range.lower[2]]);
     }
     let chroma = chroma_intervals(range);
-    // A block of pixels none of which reaches the value range and the
-    // smallest passing chroma is skipped after a test the compiler
-    // vectorises; the exact test runs only on the other blocks.
+    // A block of pixels none of which can pass the value and saturation
+    // tests is skipped after tests the compiler vectorises; the exact test
+    // runs only on the other blocks. The first, on bytes, asks for the
+    // value range and the smallest chroma that passes at any value. The
+    // second, on 16 bits and only where the first found candidates, asks
+    // for the saturation: OpenCV's is `255 diff / v` rounded, so a pixel
+    // that passes has `255 diff / v > s_lo - 1`, that is
+    // `255 diff + v > s_lo v`. Both keep every pixel the exact test may take.
     let (v_lo, v_hi) = (range.lower[2], range.upper[2]);
+    let s_lo = u16::from(range.lower[1]);
     let least_diff = chroma
         .iter()
         .filter(|c| c.1 > 0)
@@ -356,6 +362,15 @@ pub fn segment(frame: &Frame<'_>, range: &HsvRange, occlusions: &[Rect]) -> Mask
                     PIXEL_STARTS[i] & u8::from(hi >= v_lo && hi <= v_hi && hi - lo >= least_diff);
             }
             if candidates == 0 {
+                continue;
+            }
+            let mut saturated = 0u8;
+            for i in 0..3 * SEGMENT_BLOCK {
+                let (hi, lo) = (r[i].max(g[i]).max(b[i]), r[i].min(g[i]).min(b[i]));
+                let (v, diff) = (u16::from(hi), u16::from(hi - lo));
+                saturated |= PIXEL_STARTS[i] & u8::from(255 * diff + v >= s_lo * v);
+            }
+            if saturated == 0 {
                 continue;
             }
         }
@@ -528,6 +543,37 @@ mod tests {
                     );
                 }
             }
+        }
+    }
+
+    /// A block whose only candidate is a pixel at the smallest chroma that
+    /// reaches the saturation bound is not skipped: one such pixel per
+    /// block, in grey, for every value and many bounds.
+    #[test]
+    fn a_lone_pixel_just_saturated_enough_keeps_its_block() {
+        for s_lo in (2..=255).step_by(7) {
+            let mut color = Vec::new();
+            let mut want = Vec::new();
+            for v in 1..=255i32 {
+                let Some(d) = (0..=v).find(|&d| saturation(v, d) >= s_lo) else {
+                    continue;
+                };
+                let mut block = [[50u8; 3]; SEGMENT_BLOCK];
+                block[7] = [v as u8, (v - d) as u8, (v - d) as u8];
+                color.extend(block.iter().flatten());
+                want.extend((0..SEGMENT_BLOCK).map(|i| i == 7));
+            }
+            // A trailing grey block, so that every tested block has two bytes after it.
+            color.extend([50u8; 3 * SEGMENT_BLOCK]);
+            want.extend([false; SEGMENT_BLOCK]);
+            let n = want.len();
+            let depth = alloc::vec![0u16; n];
+            let f = Frame::new(n as u32, 1, &color, &depth, 0.001).expect("frame");
+            let range = HsvRange {
+                lower: [0, s_lo as u8, 0],
+                upper: [179, 255, 255],
+            };
+            assert_eq!(segment(&f, &range, &[]).data, want, "s_lo {s_lo}");
         }
     }
 
