@@ -6,7 +6,7 @@
 //
 //   node tests/browser/bench_page.mjs [<sequence folder>...]
 //
-// Without arguments: the bundled static-s sample. A folder is opened as the
+// Without arguments: the page's default sample. A folder is opened as the
 // "Open folder…" button does (make a 1280x720 one with
 // `upetrack synth static-s DIR --frames 150 --hd`).
 import { chromium } from 'playwright-core';
@@ -49,7 +49,7 @@ async function playback(page) {
     document.getElementById('play').click();
     while (u.state.index < n - 1 || u.state.playing) await new Promise((res) => setTimeout(res, 2));
     const ms = (performance.now() - t0) / (n - 1);
-    return { frames: n, perFrame: ms, stats: u.stats, w: u.state.frame.width, h: u.state.frame.height, fps: u.state.seq.info.fps };
+    return { frames: n, perFrame: ms, stats: u.stats, w: u.state.frame.width, h: u.state.frame.height, fps: u.state.seq.info.fps, seq: u.state.seq.name };
   });
 }
 
@@ -65,7 +65,7 @@ for (const decoder of (process.env.DECODERS || 'browser,canvas,wasm').split(',')
     await page.waitForFunction(() => window.upetrack && window.upetrack.state.frame, null, { timeout: 60000 });
     const first = await page.evaluate(() => window.upetrack.state.shownAt[0]);
     const r = await playback(page);
-    rows.push({ name: 'static-s (bundled)', decoder, first, ...r });
+    rows.push({ decoder, first, ...r, name: `${r.seq} (bundled, the page's default)` });
   }
   for (const dir of folders) {
     await page.goto(`${origin}/web/index.html${query}`);
