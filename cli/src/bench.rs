@@ -68,12 +68,7 @@ pub fn cmd_bench(raw: &[String]) -> Result<(), CliError> {
             let mut s = Scenario::new(kind, frames, 1, RenderSettings::default());
             let mut fr = Vec::new();
             while let Some(f) = s.next_frame() {
-                let occ = s
-                    .occlusions
-                    .iter()
-                    .filter(|o| (o.first..=o.last).contains(&f.index))
-                    .map(|o| o.rect)
-                    .collect();
+                let occ = s.occlusions_at(f.index);
                 fr.push((f.rgb, f.depth, occ));
             }
             sets.push(Prepared {

@@ -10,16 +10,11 @@ fn an_explained_frame_is_the_update_itself_stage_by_stage() {
     let mut s = Scenario::new(ScenarioKind::DynamicPull, 30, 2, RenderSettings::default());
     let camera = s.camera();
     let mut tracker = Tracker::new(Params::default(), camera, s.hsv()).expect("tracker");
-    let occlusions = s.occlusions.clone();
     let (mut stepped, mut with_hidden) = (0, 0);
     while let Some(f) = s.next_frame() {
         let frame =
             Frame::new(camera.width, camera.height, &f.rgb, &f.depth, 0.001).expect("frame");
-        let rects: Vec<_> = occlusions
-            .iter()
-            .filter(|o| (o.first..=o.last).contains(&f.index))
-            .map(|o| o.rect)
-            .collect();
+        let rects = s.occlusions_at(f.index);
         let obs = tracker.observe(&frame, &rects).expect("observe");
         let e = tracker.explain(&frame, &obs);
         let out = tracker.update(&frame, &obs);

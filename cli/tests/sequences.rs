@@ -122,11 +122,7 @@ fn track_scenario_in(
         }
         let frame =
             Frame::new(camera.width, camera.height, &f.rgb, &f.depth, 0.001).expect("frame");
-        let rects: Vec<_> = occlusions
-            .iter()
-            .filter(|o| (o.first..=o.last).contains(&f.index))
-            .map(|o| o.rect)
-            .collect();
+        let rects = s.occlusions_at(f.index);
         let out = tracker.process(&frame, &rects).expect("process");
         assert!(
             !out.is_lost(),

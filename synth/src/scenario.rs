@@ -551,6 +551,15 @@ impl Scenario {
         }
     }
 
+    /// The occlusion rectangles over frame `index`.
+    pub fn occlusions_at(&self, index: usize) -> Vec<Rect> {
+        self.occlusions
+            .iter()
+            .filter(|o| (o.first..=o.last).contains(&index))
+            .map(|o| o.rect)
+            .collect()
+    }
+
     /// The camera.
     pub fn camera(&self) -> CameraIntrinsics {
         self.render.camera
@@ -641,12 +650,7 @@ impl Scenario {
             .map(|p| pose.world_to_camera(p))
             .collect();
         let cam = self.render.camera;
-        let rects: Vec<Rect> = self
-            .occlusions
-            .iter()
-            .filter(|o| (o.first..=o.last).contains(&f))
-            .map(|o| o.rect)
-            .collect();
+        let rects = self.occlusions_at(f);
         let occluded = self
             .rope
             .x

@@ -14,15 +14,15 @@ use crate::perception::frame::{Frame, FrameError};
 use crate::perception::initialisation::{initialise, InitError};
 use crate::perception::point_cloud::build_cloud;
 use crate::perception::segmentation::{segment, HsvRange, Mask, Rect, SegmentationError};
-use crate::step::StepInput;
+use crate::step::{Algorithm, StepInput};
+use crate::upe::explain::StepExplanation;
 use crate::upe::occlusion::UpeReport;
 use crate::upe::registration::EmReport;
 use crate::upe::resampling::{polyline_length, resample_uniform};
-use crate::upe::visibility::visible_nodes_relative;
+use crate::upe::visibility::{neighbour_count, visible_nodes_relative};
+use crate::upe::UpeTrackStep;
 
-mod explain;
 mod stepper;
-pub use explain::FrameExplanation;
 pub use stepper::{StepReports, Stepper};
 
 /// A tracked rope longer than this multiple of its length at
@@ -541,6 +541,53 @@ impl Loss {
                 found_mm: found * 1000.0,
                 known_mm: known * 1000.0,
             },
+        }
+    }
+}
+
+/// What [`Tracker::explain`] found.
+#[derive(Debug, Clone)]
+pub struct FrameExplanation {
+    /// The frame's update, as [`Tracker::update`] gives it.
+    pub output: FrameOutput,
+    /// The nodes before the frame (empty when the frame initialised).
+    pub previous: Vec<Vec3>,
+    /// Cloud points within `r_vis` of each previous node (`q`).
+    pub neighbour_counts: Vec<usize>,
+    /// The shared visibility of the previous nodes.
+    pub visible: Vec<bool>,
+    /// Every stage of the UPETrack step, when the frame was tracked by one.
+    pub step: Option<StepExplanation>,
+}
+
+impl Tracker {
+    /// Explains the update of `frame` (observed as `obs`) from the present
+    /// state, without changing it: the same result [`Tracker::update`]
+    /// would give, with the stages that led to it.
+    pub fn explain(&self, frame: &Frame<'_>, obs: &Observation) -> FrameExplanation {
+        let output = self.clone().update(frame, obs);
+        let previous = match &self.state {
+            Some(s) if !s.lost => s.nodes.clone(),
+            _ => Vec::new(),
+        };
+        let radius = self.params.visibility_radius;
+        let neighbour_counts = previous
+            .iter()
+            .map(|y| neighbour_count(y, &obs.cloud, radius))
+            .collect();
+        let visible = self.visibility(&previous, &obs.cloud);
+        let tracked = output.status == FrameStatus::Tracked;
+        let step = (tracked && self.params.algorithm == Algorithm::Upetrack).then(|| {
+            let camera = self.camera;
+            let input = self.step_input(&camera, frame, obs, &previous, &visible);
+            UpeTrackStep::explain(&input, &self.params.upetrack).1
+        });
+        FrameExplanation {
+            output,
+            previous,
+            neighbour_counts,
+            visible,
+            step,
         }
     }
 }
