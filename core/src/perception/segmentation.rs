@@ -315,7 +315,7 @@ fn chroma_intervals(range: &HsvRange) -> [(i32, u32); 256] {
 
 /// Segments `frame` with `range` after setting the colour pixels inside each
 /// of `occlusions` to black (depth is left as it is). Value and saturation
-/// are tested together by one table lookup per pixel ([`chroma_intervals`]),
+/// are tested together by one table lookup per pixel (`chroma_intervals`),
 /// so hue is computed only for candidate pixels.
 pub fn segment(frame: &Frame<'_>, range: &HsvRange, occlusions: &[Rect]) -> Mask {
     let mut mask = Mask::new(frame.width, frame.height);
