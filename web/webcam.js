@@ -45,6 +45,7 @@ export async function startWebcam(onOpened) {
   state.tracked = -1;
   state.index = 0;
   state.userRects = [];
+  state.truthPx = null; // a live camera has no ground truth
   state.webcam = { stream, video, frames: 0, depthScale };
   canvas.width = camera.width;
   canvas.height = camera.height;

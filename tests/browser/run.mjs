@@ -664,7 +664,7 @@ await test('webcam mode: Chromium\'s fake camera plays a synthetic rope; a click
   const r = await page.evaluate(() => {
     const s = window.upetrack.state;
     const res = s.results[s.index];
-    return { px: Array.from(res.nodesPx), status: res.status, w: s.frame.width, h: s.frame.height, stats: window.upetrack.stats };
+    return { px: Array.from(res.nodesPx), status: res.status, w: s.frame.width, h: s.frame.height, stats: window.upetrack.stats, truth: s.truthPx };
   });
   // Each node's distance to the ground truth's centre line in the image.
   const line = gt.map(([x, y, z]) => [615 * x / z + 320, 615 * y / z + 240]);
@@ -676,6 +676,7 @@ await test('webcam mode: Chromium\'s fake camera plays a synthetic rope; a click
   assert(fx === undefined || Math.abs(fx - 615) < 1e-9, `the synthetic camera's fx is ${fx}`);
   assert(r.w === 640 && r.h === 480 && r.status === 'tracked' && mean < 3 && Math.max(...dists) < 8, `webcam nodes: ${JSON.stringify({ mean, status: r.status })}`);
   assert(errors.length === 0, `page errors: ${errors}`);
+  assert(r.truth === null, 'a ground truth is drawn over the live camera');
   await page.screenshot({ path: path.join(artifacts, 'webcam.png') });
   await ctx2.close();
 });
