@@ -71,6 +71,22 @@ pub struct ParamInfo {
     pub scale: f64,
 }
 
+impl ParamInfo {
+    /// The same parameter kept in metres and shown in millimetres.
+    const fn in_mm(self) -> Self {
+        self.in_unit("mm", 1000.0)
+    }
+
+    /// The same parameter shown in `unit`, `scale` times the stored value.
+    const fn in_unit(self, unit: &'static str, scale: f64) -> Self {
+        ParamInfo {
+            unit,
+            scale,
+            ..self
+        }
+    }
+}
+
 const fn number(min: f64, max: f64, step: f64) -> ParamKind {
     ParamKind::Number { min, max, step }
 }
@@ -97,21 +113,6 @@ const fn p(
     }
 }
 
-/// A length kept in metres, shown in millimetres.
-const fn mm(
-    path: &'static str,
-    group: ParamGroup,
-    symbol: &'static str,
-    meaning: &'static str,
-    kind: ParamKind,
-) -> ParamInfo {
-    ParamInfo {
-        unit: "mm",
-        scale: 1000.0,
-        ..p(path, group, symbol, meaning, kind)
-    }
-}
-
 use ParamGroup::{Cdcpd2, Cpd, Shared, Trackdlo, Upetrack};
 
 /// Every parameter, in the panel's order (sections in `ParamGroup`'s order).
@@ -123,13 +124,14 @@ pub const PARAMETERS: &[ParamInfo] = &[
         "Number of nodes along the rope",
         integer(4.0, 1000.0),
     ),
-    mm(
+    p(
         "visibility_radius",
         Shared,
         "r_vis",
         "A node is visible with enough cloud points this close",
         number(1.0, 1000.0, 1.0),
-    ),
+    )
+    .in_mm(),
     p(
         "visibility_min_points",
         Shared,
@@ -144,20 +146,22 @@ pub const PARAMETERS: &[ParamInfo] = &[
         "Also needed: this fraction of the visible nodes' median count (0: the paper's rule)",
         number(0.0, 1.0, 0.05),
     ),
-    mm(
+    p(
         "voxel_size",
         Shared,
         "leaf",
         "Voxel-grid leaf of the cloud's downsampling (0 keeps every point)",
         number(0.0, 100.0, 0.5),
-    ),
-    mm(
+    )
+    .in_mm(),
+    p(
         "dlo_radius",
         Shared,
         "r_DLO",
         "Rope radius: the cloud is pushed pi/4 of it to the centre line (0: off)",
         number(0.0, 100.0, 0.5),
-    ),
+    )
+    .in_mm(),
     p(
         "estimate_radius",
         Shared,
@@ -165,20 +169,22 @@ pub const PARAMETERS: &[ParamInfo] = &[
         "Measure the radius from the rope's width and depth at initialisation",
         ParamKind::Bool,
     ),
-    mm(
+    p(
         "min_depth",
         Shared,
         "z_min",
         "Nearest depth taken as a measurement",
         number(0.0, 99_000.0, 10.0),
-    ),
-    mm(
+    )
+    .in_mm(),
+    p(
         "max_depth",
         Shared,
         "z_max",
         "Farthest depth taken as a measurement (above z_min)",
         number(200.0, 100_000.0, 10.0),
-    ),
+    )
+    .in_mm(),
     p(
         "min_blob_pixels",
         Shared,
@@ -265,13 +271,14 @@ pub const PARAMETERS: &[ParamInfo] = &[
         "Weight of the uniform outlier component of the GMM (Eq. 3)",
         number(0.0, 0.99, 0.01),
     ),
-    mm(
+    p(
         "em_tolerance",
         Upetrack,
         "ε",
         "EM stops when no node moves more than this",
         number(0.01, 1000.0, 0.01),
-    ),
+    )
+    .in_mm(),
     p(
         "em_max_iterations",
         Upetrack,
@@ -279,17 +286,14 @@ pub const PARAMETERS: &[ParamInfo] = &[
         "Most EM iterations per frame",
         integer(1.0, 1000.0),
     ),
-    ParamInfo {
-        unit: "mm²",
-        scale: 1e6,
-        ..p(
-            "min_variance",
-            Upetrack,
-            "σ²_min",
-            "Floor of the GMM variance",
-            number(0.01, 100.0, 0.01),
-        )
-    },
+    p(
+        "min_variance",
+        Upetrack,
+        "σ²_min",
+        "Floor of the GMM variance",
+        number(0.01, 100.0, 0.01),
+    )
+    .in_unit("mm²", 1e6),
     p(
         "cpd.beta",
         Cpd,
@@ -360,13 +364,14 @@ pub const PARAMETERS: &[ParamInfo] = &[
         "Most iterations of each CPD-LLE",
         integer(1.0, 1000.0),
     ),
-    mm(
+    p(
         "trackdlo.tolerance",
         Trackdlo,
         "tol",
         "Stop when the mean node displacement of an iteration is below this",
         number(0.001, 100.0, 0.01),
-    ),
+    )
+    .in_mm(),
     p(
         "trackdlo.k_vis",
         Trackdlo,
@@ -374,20 +379,22 @@ pub const PARAMETERS: &[ParamInfo] = &[
         "Strength of the visibility weighting, 1/metres",
         number(0.0, 10_000.0, 1.0),
     ),
-    mm(
+    p(
         "trackdlo.d_vis",
         Trackdlo,
         "d_vis",
         "Gaps between visible nodes up to this along the rope count as visible",
         number(0.0, 1000.0, 1.0),
-    ),
-    mm(
+    )
+    .in_mm(),
+    p(
         "trackdlo.visibility_threshold",
         Trackdlo,
         "τ_vis",
         "A node is visible when a point lies this close",
         number(0.1, 1000.0, 0.5),
-    ),
+    )
+    .in_mm(),
     p(
         "trackdlo.dlo_pixel_width",
         Trackdlo,
