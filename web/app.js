@@ -144,7 +144,7 @@ $('embed-snippet').textContent =
 // bit for bit, and the fastest on the machines measured, docs/testing.md),
 // the browser (ImageDecoder, or createImageBitmap where there is none), or
 // createImageBitmap always ('canvas').
-const DECODERS = ['browser', 'canvas', 'wasm'];
+const DECODERS = ['wasm', 'browser', 'canvas'];
 
 // `speed=` must be one of the offered speeds; anything else is refused.
 function applySpeed(text) {

@@ -466,6 +466,53 @@ await test('a shared link carries the colour range and drawn occlusions', async 
   const m = await messageOf(bad);
   assert(m.includes('hsv=1,2,3: give six whole numbers'), m);
   await bad.close();
+  const bad2 = await newPage('?autoplay=0&rects=1,2,3', { errors: true });
+  const m2 = await messageOf(bad2);
+  assert(m2.includes('rects=1,2,3: give x,y,w,h whole numbers'), m2);
+  await bad2.close();
+});
+
+await test('bad link values, scene options, a missing camera and an image the browser cannot decode are named', async () => {
+  let page = await newPage('?autoplay=0&decode=fast', { errors: true });
+  let m = await messageOf(page);
+  assert(m.includes('decode=fast is not one of wasm, browser, canvas'), m);
+  await page.close();
+  page = await newPage('?explain=cpd', { errors: true });
+  m = await messageOf(page);
+  assert(m.includes("explain=cpd: the explain mode shows UPETrack's step"), m);
+  await page.close();
+  page = await newPage('?explain=upe&frame=99', { errors: true });
+  m = await messageOf(page);
+  assert(m.includes('frame 99 is not in this sequence (frames 0 to 24)'), m);
+  // Scene options are checked by SynthScene.
+  const scene = await page.evaluate(async () => {
+    const w = await import('./pkg/upetrack_wasm.js');
+    const tryMake = (o) => { try { new w.SynthScene(o).free(); return 'made'; } catch (e) { return e.message; } };
+    return [tryMake({ scenario: 'nope', frames: 5, seed: 1 }), tryMake({ scenario: 'static-s', frames: 0, seed: 1 }),
+      tryMake({ scenario: 'static-s', frames: 5, seed: 1, pull_scale: 5 }), tryMake({ scenario: 'static-s', frames: 5, seed: 1, rope_colour: 'pink' }),
+      tryMake({ scenario: 'static-s', frames: 5, seed: 1, variant: 'x' })];
+  });
+  assert(scene[0].includes('no scenario named `nope`') && scene[1].includes('frames must be in 1..=600') && scene[2].includes('pull_scale must be in [0, 3]')
+    && scene[3].includes('no rope colour named `pink`') && scene[4].includes('no scene variant named `x`'), JSON.stringify(scene));
+  await page.close();
+  // No camera here (no fake device in this browser): a message, and the sample stays.
+  page = await newPage('?autoplay=0', { errors: true });
+  await page.click('#webcam');
+  await page.waitForFunction(() => !document.getElementById('message').hidden, null, { timeout: 10000 });
+  m = await messageOf(page);
+  const still = await page.evaluate(() => window.upetrack.state.seq.name);
+  assert(m.includes('The camera could not be opened') && still === 'static-s', `${m} (${still})`);
+  await page.close();
+  // Bytes that are no image, decoded by the browser.
+  const junk = path.join(tmp, 'junk-colour');
+  fs.cpSync(path.join(root, 'samples/static-s'), junk, { recursive: true });
+  fs.writeFileSync(path.join(junk, 'color/000000.jpg'), 'these bytes are not an image');
+  page = await newPage('?autoplay=0&decode=browser', { errors: true });
+  await page.setInputFiles('#folder', junk);
+  await page.waitForFunction(() => !document.getElementById('message').hidden, null, { timeout: 10000 });
+  m = await messageOf(page);
+  assert(m.includes('color/000000.jpg: the browser cannot decode this image'), m);
+  await page.close();
 });
 
 await test('the opening look: the page as it is loops its sample, makes a 150-frame scene in the tab and plays it on', async () => {
