@@ -11,7 +11,31 @@ import { frameFields, activeRects } from './sequence.js';
 import { canvas, ctx, MAIN_COLOURS } from './draw.js';
 
 const fmt = (x, d = 1) => (Number.isFinite(x) ? x.toFixed(d) : '-');
-const COLOURS = { cloud: '#00e0ff', visible: '#30d050', hidden: '#ffa000', forward: '#00c8ff', backward: '#ff4fd8', slid: '#ffe000', line: '255,255,255' };
+const COLOURS = { cloud: '#00e0ff', visible: '#30d050', hidden: '#ffa000', forward: '#00c8ff', backward: '#ff4fd8', slid: '#ffe000', line: '255,255,255', displacement: '#7dff5a' };
+
+// Displacements of a frame are a few pixels: drawn this many times longer.
+const DISPLACEMENT_SCALE = 5;
+
+// The known nodes next to each hidden run (its anchors) and the three known
+// nodes on each side whose displacements Eq. 6 uses.
+function anchorsAndNeighbours(visible) {
+  const n = visible.length;
+  const anchors = new Set();
+  const neighbours = new Set();
+  for (let m = 0; m < n; m++) {
+    if (visible[m]) continue;
+    for (const dir of [-1, 1]) {
+      const a = m + dir;
+      if (a < 0 || a >= n || !visible[a]) continue;
+      anchors.add(a);
+      for (let k = 0; k < 3; k++) {
+        const j = a + dir * k;
+        if (j >= 0 && j < n && visible[j]) neighbours.add(j);
+      }
+    }
+  }
+  return { anchors: [...anchors], neighbours: [...neighbours] };
+}
 
 // The steps of a frame's explanation, each { name, title, text, draw }.
 function steps(v) {
@@ -78,12 +102,24 @@ function steps(v) {
   out.push({
     name: 'upe', title: 'Occlusion estimate: UPE (Eq. 6-11)',
     text: hidden
-      ? `Each hidden node (hollow: where it was) is placed from the three known nodes before it in the sweep's direction: their displacements decayed by γ = ${fmt(p.displacement_decay, 2)} (Eq. 6-7) give one estimate, the last two known nodes extended by b = ${fmt(p.bending_resistance, 2)} times the old spacing with a = ${fmt(p.curvature_retention, 2)} of the old bend (Eq. 8-10) another; α = ${fmt(p.displacement_weight, 2)} blends them (Eq. 11). The sweep forward (cyan) and backward (magenta) both reach a run in the middle, which takes their mean; ${ends ? `${ends} node${ends > 1 ? 's' : ''} of a run at an end of the rope use α_end = ${fmt(p.end_displacement_weight, 2)}${p.hidden_motion !== 'paper' ? ' and slide along the rope (yellow)' : ''}` : 'no run reaches an end of the rope'}. Orange: the result.`
+      ? `Each hidden node (hollow: where it was) is placed from the three known nodes before it in the sweep's direction, from the run's anchor (white ring) on: their displacements since the last frame (green arrows, ${DISPLACEMENT_SCALE} times longer) decayed by γ = ${fmt(p.displacement_decay, 2)} (Eq. 6-7) give one estimate, the last two known nodes extended by b = ${fmt(p.bending_resistance, 2)} times the old spacing with a = ${fmt(p.curvature_retention, 2)} of the old bend (Eq. 8-10) another; α = ${fmt(p.displacement_weight, 2)} blends them (Eq. 11). The sweep forward (cyan) and backward (magenta) both reach a run in the middle, which takes their mean; ${ends ? `${ends} node${ends > 1 ? 's' : ''} of a run at an end of the rope use α_end = ${fmt(p.end_displacement_weight, 2)}${p.hidden_motion !== 'paper' ? ' and slide along the rope (yellow)' : ''}` : 'no run reaches an end of the rope'}. Orange: the result.`
       : 'Every node is visible in this frame: there is nothing to estimate.',
     draw: () => {
       dim();
       dots(v.cloud_px, COLOURS.cloud, 1);
       polyline(v.estimated_px, 'rgba(255,255,255,0.6)');
+      // Each run's anchors (the known nodes next to it, white rings) and
+      // the displacements D_k of the three known nodes on each side since
+      // the last frame (green, drawn 5 times longer).
+      for (const m of anchorsAndNeighbours(v.visible).neighbours) {
+        const [u0, w0] = [v.previous_px[2 * m], v.previous_px[2 * m + 1]];
+        const [du, dw] = [v.registered_px[2 * m] - u0, v.registered_px[2 * m + 1] - w0];
+        arrow(u0, w0, u0 + DISPLACEMENT_SCALE * du, w0 + DISPLACEMENT_SCALE * dw, COLOURS.displacement);
+      }
+      for (const m of anchorsAndNeighbours(v.visible).anchors) {
+        ctx.strokeStyle = '#ffffff'; ctx.lineWidth = 2;
+        ctx.beginPath(); ctx.arc(v.registered_px[2 * m], v.registered_px[2 * m + 1], 7, 0, 2 * Math.PI); ctx.stroke();
+      }
       for (let m = 0; m < v.visible.length; m++) {
         if (v.visible[m]) continue;
         const [u0, w0] = [v.previous_px[2 * m], v.previous_px[2 * m + 1]];

@@ -447,6 +447,11 @@ await test('explain mode: a deep link opens at its step; steps change the drawin
   const seg = await newPage('?sample=dynamic-pull&explain=upe&frame=20&step=visibility');
   await seg.screenshot({ path: path.join(artifacts, 'explain-visibility.png') });
   await seg.close();
+  const upeShot = await newPage('?sample=dynamic-pull&explain=upe&frame=20&step=upe');
+  const upeText = await upeShot.evaluate(() => document.getElementById('explain-text').textContent);
+  assert(/anchor \(white ring\)/.test(upeText) && /green arrows, 5 times longer/.test(upeText), upeText);
+  await upeShot.screenshot({ path: path.join(artifacts, 'explain-upe.png') });
+  await upeShot.close();
   const bad = await newPage('?explain=upe&frame=3&step=em-99', { errors: true });
   const m = await messageOf(bad);
   assert(m.includes('step=em-99: frame 3 has the steps segmentation, cloud, visibility, em-1'), m);
@@ -736,7 +741,7 @@ await test('no console errors and no request leaves the origin', async () => {
 });
 
 // DOCS_SCREENSHOTS=1 copies the screenshots of each mode into docs/images/.
-const DOC_SHOTS = ['page.png', 'compare.png', 'parameters.png', 'explain-visibility.png', 'explain-em.png',
+const DOC_SHOTS = ['page.png', 'compare.png', 'parameters.png', 'explain-visibility.png', 'explain-em.png', 'explain-upe.png',
   'explain-resampling.png', 'scene.png', 'webcam.png'];
 // They are made smaller on the way (at most 960 px wide, JPEG) by the browser.
 if (process.env.DOCS_SCREENSHOTS && !only && !failed) {
