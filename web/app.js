@@ -41,13 +41,14 @@ hooks.opened = async () => {
 };
 
 hooks.closing = stopWebcam;
-$('webcam').onclick = guarded(() => startWebcam((hsv) => {
+// The same button stops the camera; the sample list reopens a sequence.
+$('webcam').onclick = guarded(() => (state.webcam ? stopWebcam() : startWebcam((hsv) => {
   updatePlayButton();
   renderRects();
   setHsvInputs(hsv);
   setMode('pick', true);
   $('seq-details').textContent = '';
-}));
+})));
 
 $('message-close').onclick = () => { $('message').hidden = true; };
 

@@ -11,6 +11,14 @@ import { draw, canvas } from './draw.js';
 import { keep } from './playback.js';
 import { updateStatsPanel, STATS_WINDOW } from './plot.js';
 
+// Controls that need kept frames: off while the camera is live.
+const RECORDED_ONLY = ['play', 'step', 'step-back', 'timeline', 'explain', 'export'];
+
+function setLive(live) {
+  for (const id of RECORDED_ONLY) $(id).disabled = live;
+  $('webcam').textContent = live ? 'Stop webcam' : 'Webcam';
+}
+
 // The resolution asked of the camera (it may give another).
 const WANTED = { width: 640, height: 480 };
 
@@ -49,6 +57,7 @@ export async function startWebcam(onOpened) {
   state.webcam = { stream, video, frames: 0, depthScale };
   canvas.width = camera.width;
   canvas.height = camera.height;
+  setLive(true);
   onOpened(hsv);
   showNote('Webcam: click the rope to take its colour. Tracking is in the image plane (colour only, depth taken as constant).');
   loop(state.webcam).catch((err) => showError(`Webcam: ${err.message || err}`));
@@ -59,6 +68,7 @@ export function stopWebcam() {
   if (!w) return;
   state.webcam = null;
   for (const t of w.stream.getTracks()) t.stop();
+  setLive(false);
 }
 
 async function loop(w) {

@@ -729,7 +729,15 @@ await test('webcam mode: Chromium\'s fake camera plays a synthetic rope; a click
   assert(r.w === 640 && r.h === 480 && r.status === 'tracked' && mean < 3 && Math.max(...dists) < 8, `webcam nodes: ${JSON.stringify({ mean, status: r.status })}`);
   assert(errors.length === 0, `page errors: ${errors}`);
   assert(r.truth === null, 'a ground truth is drawn over the live camera');
+  const live = await page.evaluate(() => ['play', 'timeline', 'explain'].map((id) => document.getElementById(id).disabled));
+  assert(live.every(Boolean), `controls for kept frames enabled while live: ${live}`);
   await page.screenshot({ path: path.join(artifacts, 'webcam.png') });
+  // Stopping the camera, then a sample: the controls come back and it plays.
+  await page.click('#webcam');
+  const stopped = await page.evaluate(() => ({ webcam: window.upetrack.state.webcam, play: document.getElementById('play').disabled, label: document.getElementById('webcam').textContent }));
+  assert(stopped.webcam === null && !stopped.play && stopped.label === 'Webcam', JSON.stringify(stopped));
+  await page.selectOption('#sample', 'dynamic-pull');
+  await page.waitForFunction(() => window.upetrack.state.seq.name === 'dynamic-pull' && window.upetrack.state.tracked >= 0, null, { timeout: 30000 });
   await ctx2.close();
 });
 
