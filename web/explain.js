@@ -111,12 +111,13 @@ function steps(v) {
       // Each run's anchors (the known nodes next to it, white rings) and
       // the displacements D_k of the three known nodes on each side since
       // the last frame (green, drawn 5 times longer).
-      for (const m of anchorsAndNeighbours(v.visible).neighbours) {
+      const { anchors, neighbours } = anchorsAndNeighbours(v.visible);
+      for (const m of neighbours) {
         const [u0, w0] = [v.previous_px[2 * m], v.previous_px[2 * m + 1]];
         const [du, dw] = [v.registered_px[2 * m] - u0, v.registered_px[2 * m + 1] - w0];
         arrow(u0, w0, u0 + DISPLACEMENT_SCALE * du, w0 + DISPLACEMENT_SCALE * dw, COLOURS.displacement);
       }
-      for (const m of anchorsAndNeighbours(v.visible).anchors) {
+      for (const m of anchors) {
         ctx.strokeStyle = '#ffffff'; ctx.lineWidth = 2;
         ctx.beginPath(); ctx.arc(v.registered_px[2 * m], v.registered_px[2 * m + 1], 7, 0, 2 * Math.PI); ctx.stroke();
       }

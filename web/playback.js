@@ -6,7 +6,7 @@ import { call } from './worker-client.js';
 import { Request } from './protocol.js';
 import { requestFrame } from './sequence.js';
 import { draw } from './draw.js';
-import { updateLabels, drawPlot, updateStatsPanel, STATS_WINDOW } from './plot.js';
+import { updateLabels, drawPlot, updateStatsPanel, pageStats, STATS_WINDOW } from './plot.js';
 import { projectPoints } from './core.js';
 import { showStep } from './explain.js';
 
@@ -23,8 +23,9 @@ export function render() {
   if (state.explain && state.explain.index === state.index) showStep(); else draw();
   state.shownAt.push(performance.now());
   if (state.shownAt.length > STATS_WINDOW) state.shownAt.shift();
-  updateLabels();
-  updateStatsPanel();
+  const stats = pageStats();
+  updateLabels(stats);
+  updateStatsPanel(stats);
   drawPlot();
 }
 

@@ -30,9 +30,9 @@ export function pageStats() {
   };
 }
 
-// The small panel over the image's corner: the same medians.
-export function updateStatsPanel() {
-  const s = pageStats();
+// The small panel over the image's corner: the same medians (`s`, when
+// the caller has them already).
+export function updateStatsPanel(s = pageStats()) {
   $('stats-panel').textContent = [
     `${fixed(s.fps, 0)} frames/s`,
     `decode ${fixed(s.decode_ms, 1)} ms (${s.decoder})`,
@@ -44,13 +44,13 @@ export function updateStatsPanel() {
   $('stats-panel').title = `Medians over the last ${s.frames} frames; "frame" is segmentation + cloud + tracking`;
 }
 
-export function updateLabels() {
+export function updateLabels(page = pageStats()) {
   const n = state.seq.info.color_files.length;
   $('timeline').value = String(state.index);
   $('frame-label').textContent = `${state.index + 1} / ${n}`;
   const r = state.results[state.index];
   const tracked = state.results.slice(0, state.tracked + 1).filter(Boolean);
-  const fps = pageStats().fps;
+  const fps = page.fps;
   const lines = [
     `sequence ${state.seq.name}   frame ${state.index}   status ${r ? r.status : '-'}${r && r.reason ? ` (${r.reason})` : ''}`,
     r ? `tracking ${r.trackMs.toFixed(2)} ms   segmentation+cloud+tracking ${r.totalMs.toFixed(2)} ms   decoding ${r.decodeMs.toFixed(1)} ms   median tracking ${fixed(stats(tracked.map((x) => x.trackMs)).median, 2)} ms` : '',

@@ -27,18 +27,24 @@ export function shareLink() {
   return url.toString();
 }
 
+// `count` comma-separated whole numbers, or null.
+function wholeNumbers(text, count) {
+  const v = text.split(',').map((x) => (x.trim() === '' ? NaN : Number(x)));
+  return v.length === count && v.every(Number.isInteger) ? v : null;
+}
+
 // `hsv=h,s,v,h,s,v` as { lower, upper }, or an error naming the value.
 export function parseHsvQuery(text) {
-  const v = text.split(',').map((x) => (x.trim() === '' ? NaN : Number(x)));
-  if (v.length !== 6 || !v.every(Number.isInteger)) throw new Error(`hsv=${text}: give six whole numbers, lower h,s,v then upper h,s,v`);
+  const v = wholeNumbers(text, 6);
+  if (!v) throw new Error(`hsv=${text}: give six whole numbers, lower h,s,v then upper h,s,v`);
   return { lower: v.slice(0, 3), upper: v.slice(3) };
 }
 
 // `rects=x,y,w,h;...` as rectangles, or an error naming the value.
 export function parseRectsQuery(text) {
   return text.split(';').filter(Boolean).map((r) => {
-    const v = r.split(',').map((x) => (x.trim() === '' ? NaN : Number(x)));
-    if (v.length !== 4 || !v.every(Number.isInteger)) throw new Error(`rects=${text}: give x,y,w,h whole numbers for each rectangle, separated by ;`);
+    const v = wholeNumbers(r, 4);
+    if (!v) throw new Error(`rects=${text}: give x,y,w,h whole numbers for each rectangle, separated by ;`);
     return v;
   });
 }

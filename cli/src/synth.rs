@@ -28,24 +28,32 @@ pub fn list_scenarios() {
 
 /// Writes `scenario` into `dir`; returns the number of frames written.
 pub fn write_scenario(scenario: Scenario, dir: &Path) -> Result<usize, CliError> {
-    Ok(upetrack_io::synthetic::write_scenario(
-        scenario,
-        &mut |(path, bytes)| write_file(&dir.join(path), &bytes),
-    )?)
+    write_scenario_and_video(scenario, dir, None)
 }
 
-/// Writes `scenario`'s colour frames as a `.y4m` video (a fake camera's
-/// input); returns the number of frames written.
-fn write_video(mut scenario: Scenario, path: &Path) -> Result<usize, CliError> {
+/// [`write_scenario`], and with `video` its colour frames as a `.y4m` (a
+/// fake camera's input) from the same rendering.
+fn write_scenario_and_video(
+    scenario: Scenario,
+    dir: &Path,
+    video: Option<&Path>,
+) -> Result<usize, CliError> {
     let camera = scenario.camera();
     let fps = upetrack_io::synthetic::SYNTHETIC_FPS as u32;
-    let mut out = y4m_header(camera.width, camera.height, fps);
-    let mut n = 0;
-    while let Some(f) = scenario.next_frame() {
-        out.extend(y4m_frame(camera.width, camera.height, &f.rgb)?);
-        n += 1;
+    let mut y4m = video.map(|_| y4m_header(camera.width, camera.height, fps));
+    let n = upetrack_io::synthetic::write_scenario(
+        scenario,
+        &mut |(path, bytes)| write_file(&dir.join(path), &bytes),
+        &mut |f| {
+            if let Some(out) = y4m.as_mut() {
+                out.extend(y4m_frame(camera.width, camera.height, &f.rgb)?);
+            }
+            Ok(())
+        },
+    )?;
+    if let (Some(path), Some(out)) = (video, y4m) {
+        write_file(path, &out)?;
     }
-    write_file(path, &out)?;
     Ok(n)
 }
 
@@ -84,15 +92,11 @@ pub fn cmd_synth(raw: &[String]) -> Result<(), CliError> {
     }
     let start = Instant::now();
     let scenario = Scenario::with_rope(kind, frames, seed, render, variant.rope());
-    if let Some(video) = args.value("y4m") {
-        let again = Scenario::with_rope(kind, frames, seed, render, variant.rope());
-        let n = write_video(again, Path::new(video))?;
-        eprintln!(
-            "{video}: {n} colour frames of {} as a .y4m video",
-            kind.name()
-        );
+    let video = args.value("y4m");
+    let n = write_scenario_and_video(scenario, Path::new(dir), video.map(Path::new))?;
+    if let Some(video) = video {
+        eprintln!("{video}: the {n} colour frames as a .y4m video");
     }
-    let n = write_scenario(scenario, Path::new(dir))?;
     eprintln!(
         "{}: {n} frames of {} written in {:.1} s",
         dir,

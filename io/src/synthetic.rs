@@ -2,14 +2,14 @@
 //! sequence files, one frame at a time, to wherever the caller keeps them:
 //! a folder for `upetrack synth`, memory for the page's scene generator.
 
-use upetrack_synth::Scenario;
+use upetrack_synth::{Scenario, SynthFrame};
 
 use crate::error::SequenceError;
 use crate::sequence::{
     DloConfig, GroundTruthFile, GroundTruthFrame, IntrinsicsFile, OcclusionConfig,
     SegmentationConfig,
 };
-use crate::write::{encode_depth_png, encode_jpeg, JPEG_QUALITY};
+use crate::write::{encode_depth_png, encode_jpeg, json_bytes, JPEG_QUALITY};
 
 /// Frames per second of every synthetic sequence.
 pub const SYNTHETIC_FPS: f64 = 30.0;
@@ -21,11 +21,7 @@ pub const SYNTHETIC_DEPTH_SCALE: f64 = 0.001;
 pub type SequenceFile = (String, Vec<u8>);
 
 fn json<T: serde::Serialize>(path: &str, value: &T) -> Result<SequenceFile, SequenceError> {
-    let text = serde_json::to_string_pretty(value).map_err(|e| SequenceError::Json {
-        path: path.to_string(),
-        message: e.to_string(),
-    })?;
-    Ok((path.to_string(), text.into_bytes()))
+    Ok((path.to_string(), json_bytes(path, value)?))
 }
 
 /// Writes a scenario's files in order: [`SyntheticWriter::header`], then
@@ -84,10 +80,20 @@ impl SyntheticWriter {
     /// Simulates and renders the next frame: its colour JPEG and depth PNG,
     /// or `None` after the last frame.
     pub fn next_frame(&mut self) -> Result<Option<[SequenceFile; 2]>, SequenceError> {
+        self.next_frame_seen(&mut |_| Ok(()))
+    }
+
+    /// [`SyntheticWriter::next_frame`], showing `see` the rendered frame first
+    /// (to write it elsewhere too, as a video).
+    pub fn next_frame_seen(
+        &mut self,
+        see: &mut dyn FnMut(&SynthFrame) -> Result<(), SequenceError>,
+    ) -> Result<Option<[SequenceFile; 2]>, SequenceError> {
         let camera = self.scenario.camera();
         let Some(f) = self.scenario.next_frame() else {
             return Ok(None);
         };
+        see(&f)?;
         let name = format!("{:06}", f.index);
         let jpg = encode_jpeg(camera.width, camera.height, &f.rgb, JPEG_QUALITY)?;
         let png = encode_depth_png(camera.width, camera.height, &f.depth)?;
@@ -117,16 +123,18 @@ impl SyntheticWriter {
     }
 }
 
-/// Writes every file of `scenario` through `put`; returns the frame count.
+/// Writes every file of `scenario` through `put`, showing `see` each
+/// rendered frame; returns the frame count.
 pub fn write_scenario(
     scenario: Scenario,
     put: &mut dyn FnMut(SequenceFile) -> Result<(), SequenceError>,
+    see: &mut dyn FnMut(&SynthFrame) -> Result<(), SequenceError>,
 ) -> Result<usize, SequenceError> {
     let mut w = SyntheticWriter::new(scenario);
     for f in w.header()? {
         put(f)?;
     }
-    while let Some(files) = w.next_frame()? {
+    while let Some(files) = w.next_frame_seen(see)? {
         for f in files {
             put(f)?;
         }

@@ -143,13 +143,18 @@ pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), SequenceError> {
     std::fs::write(path, bytes).map_err(|e| io_err(path, e))
 }
 
+/// `value` as pretty JSON (the layout every written file has); `path`
+/// names the file in errors.
+pub fn json_bytes<T: serde::Serialize>(path: &str, value: &T) -> Result<Vec<u8>, SequenceError> {
+    serde_json::to_vec_pretty(value).map_err(|e| SequenceError::Json {
+        path: path.to_string(),
+        message: e.to_string(),
+    })
+}
+
 /// Writes `value` as pretty JSON to `path`.
 pub fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<(), SequenceError> {
-    let text = serde_json::to_string_pretty(value).map_err(|e| SequenceError::Json {
-        path: path.display().to_string(),
-        message: e.to_string(),
-    })?;
-    write_file(path, text.as_bytes())
+    write_file(path, &json_bytes(&path.display().to_string(), value)?)
 }
 
 #[cfg(test)]

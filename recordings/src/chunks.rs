@@ -1,11 +1,12 @@
 //! What the chunked containers (ROS1 bags, MCAP) share: decompressing a
 //! chunk with its declared size checked before anything is allocated, a
-//! bounded cache of decompressed chunks, and how a scan says where it stopped.
+//! bounded cache of decompressed chunks, the cap on their message index, and
+//! how a scan says where it stopped.
 
 use std::io::Read;
 use std::rc::Rc;
 
-use crate::error::RecordingError;
+use crate::error::{push_capped, RecordingError};
 
 /// Largest uncompressed chunk, bytes: checked against the chunk's declared
 /// size before anything is allocated or decompressed.
@@ -72,6 +73,15 @@ fn check_size(out: Vec<u8>, size: u64, offset: u64) -> Result<Vec<u8>, Recording
         ));
     }
     Ok(out)
+}
+
+/// Most messages indexed in one bag or MCAP file (a 4 GB D435i recording
+/// has about 10^5).
+pub const MAX_MESSAGES: usize = 20_000_000;
+
+/// Adds `m` to a container's message index, refusing the one past [`MAX_MESSAGES`].
+pub fn push_message<T>(messages: &mut Vec<T>, m: T) -> Result<(), RecordingError> {
+    push_capped(messages, m, MAX_MESSAGES, "number of messages")
 }
 
 /// The warning of a scan that stopped at byte `pos` on `e`, keeping `kept` messages.

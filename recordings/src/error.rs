@@ -104,3 +104,22 @@ impl RecordingError {
         }
     }
 }
+
+/// Adds `item` to a list that may hold at most `max` items (`what` names
+/// them in the error), refusing the one past the cap.
+pub fn push_capped<T>(
+    list: &mut Vec<T>,
+    item: T,
+    max: usize,
+    what: &'static str,
+) -> Result<(), RecordingError> {
+    if list.len() >= max {
+        return Err(RecordingError::TooLarge {
+            what,
+            size: list.len() as u64 + 1,
+            max: max as u64,
+        });
+    }
+    list.push(item);
+    Ok(())
+}

@@ -10,15 +10,13 @@
 use std::collections::BTreeMap;
 
 use crate::bytes::{ByteSource, Cursor};
-use crate::chunks::{decompress, ChunkCache, MAX_CHUNK_BYTES};
+use crate::chunks::{decompress, push_message, ChunkCache, MAX_CHUNK_BYTES};
 use crate::error::RecordingError;
 
 /// The first and last 8 bytes of every MCAP file.
 pub const MAGIC: &[u8] = b"\x89MCAP0\r\n";
 /// Largest record read whole outside a chunk (schemas, channels, indexes), bytes.
 pub const MAX_RECORD_BYTES: u64 = 64 << 20;
-/// Most messages indexed in one file.
-pub const MAX_MESSAGES: usize = 20_000_000;
 
 const OP_FOOTER: u8 = 0x02;
 const OP_SCHEMA: u8 = 0x03;
@@ -226,18 +224,6 @@ impl<R: ByteSource> Mcap<R> {
         Ok(m)
     }
 
-    fn add(&mut self, r: MessageRef) -> Result<(), RecordingError> {
-        if self.messages.len() >= MAX_MESSAGES {
-            return Err(RecordingError::TooLarge {
-                what: "number of messages",
-                size: self.messages.len() as u64 + 1,
-                max: MAX_MESSAGES as u64,
-            });
-        }
-        self.messages.push(r);
-        Ok(())
-    }
-
     /// Schema and channel records, gathered wherever they are met.
     fn meta(
         op: u8,
@@ -351,12 +337,15 @@ impl<R: ByteSource> Mcap<R> {
                     } else {
                         (chunk, offset)
                     };
-                    self.add(MessageRef {
-                        channel,
-                        time_ns,
-                        chunk,
-                        offset,
-                    })?;
+                    push_message(
+                        &mut self.messages,
+                        MessageRef {
+                            channel,
+                            time_ns,
+                            chunk,
+                            offset,
+                        },
+                    )?;
                 }
             }
         }
@@ -393,12 +382,15 @@ impl<R: ByteSource> Mcap<R> {
                         self.src.read_at(body_at, &mut head)?;
                         let (channel, time_ns) = message_head(&head)
                             .ok_or_else(|| RecordingError::corrupt(pos, "message too short"))?;
-                        self.add(MessageRef {
-                            channel,
-                            time_ns,
-                            chunk: u32::MAX,
-                            offset: pos,
-                        })?;
+                        push_message(
+                            &mut self.messages,
+                            MessageRef {
+                                channel,
+                                time_ns,
+                                chunk: u32::MAX,
+                                offset: pos,
+                            },
+                        )?;
                     }
                     OP_CHUNK => {
                         let (_, body, _) = read_record(&mut self.src, pos, MAX_CHUNK_BYTES)?;
@@ -420,7 +412,7 @@ impl<R: ByteSource> Mcap<R> {
                         }
                         self.chunks.push(ChunkPlace { pos });
                         for f in found {
-                            self.add(f)?;
+                            push_message(&mut self.messages, f)?;
                         }
                     }
                     // Data end: the summary follows.
@@ -476,7 +468,7 @@ impl<R: ByteSource> Mcap<R> {
             }
         }
         for f in found {
-            self.add(f)?;
+            push_message(&mut self.messages, f)?;
         }
         Ok(())
     }

@@ -8,7 +8,7 @@
 use std::collections::BTreeMap;
 
 use crate::bytes::{ByteSource, Cursor};
-use crate::chunks::{decompress, ChunkCache};
+use crate::chunks::{decompress, push_message, ChunkCache};
 use crate::error::RecordingError;
 
 /// The first bytes of every ROS1 bag 2.0.
@@ -20,8 +20,6 @@ pub const MAX_HEADER_BYTES: u32 = 1 << 20;
 pub const MAX_CHUNK_DATA_BYTES: u32 = 256 << 20;
 /// Most connections (topics) in one bag.
 pub const MAX_CONNECTIONS: usize = 65_536;
-/// Most messages indexed in one bag (a 4 GB D435i recording has about 10^5).
-pub const MAX_MESSAGES: usize = 20_000_000;
 
 const OP_MESSAGE: u8 = 0x02;
 const OP_BAG_HEADER: u8 = 0x03;
@@ -332,18 +330,6 @@ impl<R: ByteSource> Bag<R> {
         self.add_connection(c)
     }
 
-    fn add_message(&mut self, m: MessageRef) -> Result<(), RecordingError> {
-        if self.messages.len() >= MAX_MESSAGES {
-            return Err(RecordingError::TooLarge {
-                what: "number of messages",
-                size: self.messages.len() as u64 + 1,
-                max: MAX_MESSAGES as u64,
-            });
-        }
-        self.messages.push(m);
-        Ok(())
-    }
-
     /// The index path: connections and chunk infos at `index_pos`, then the
     /// index records after each chunk. No chunk is decompressed.
     fn read_index(&mut self, index_pos: u64) -> Result<(), RecordingError> {
@@ -394,12 +380,15 @@ impl<R: ByteSource> Bag<R> {
                 for _ in 0..n {
                     let time_ns = ros_time_ns(&mut c, "index entry")?;
                     let offset = c.u32("index entry")?;
-                    self.add_message(MessageRef {
-                        conn,
-                        time_ns,
-                        chunk: chunk_index,
-                        offset,
-                    })?;
+                    push_message(
+                        &mut self.messages,
+                        MessageRef {
+                            conn,
+                            time_ns,
+                            chunk: chunk_index,
+                            offset,
+                        },
+                    )?;
                 }
                 at = rec.end();
             }
@@ -466,7 +455,7 @@ impl<R: ByteSource> Bag<R> {
                     self.add_connection(c)?;
                 }
                 for m in messages {
-                    self.add_message(m)?;
+                    push_message(&mut self.messages, m)?;
                 }
             }
             _ => {}

@@ -6,7 +6,7 @@
 //! read when that row's value is asked for.
 
 use crate::bytes::ByteSource;
-use crate::error::RecordingError;
+use crate::error::{push_capped, RecordingError};
 
 /// The first 16 bytes of every SQLite 3 database.
 pub const MAGIC: &[u8] = b"SQLite format 3\0";
@@ -212,14 +212,7 @@ impl<R: ByteSource> Database<R> {
                     for i in 0..cells {
                         let c = cell_at(i);
                         let row = self.leaf_row(&page, n, c)?;
-                        if out.len() >= MAX_ROWS {
-                            return Err(RecordingError::TooLarge {
-                                what: "rows in one table",
-                                size: out.len() as u64 + 1,
-                                max: MAX_ROWS as u64,
-                            });
-                        }
-                        out.push(row);
+                        push_capped(&mut out, row, MAX_ROWS, "rows in one table")?;
                     }
                 }
                 other => {

@@ -9,8 +9,7 @@
 // Without arguments: the page's default sample. A folder is opened as the
 // "Open folder…" button does (make a 1280x720 one with
 // `upetrack synth static-s DIR --frames 150 --hd`).
-import { chromium } from 'playwright-core';
-import http from 'node:http';
+import { serveRepository, launchChromium } from './harness.mjs';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
@@ -20,23 +19,9 @@ const here = path.dirname(fileURLToPath(import.meta.url));
 const root = path.resolve(here, '../..');
 const folders = process.argv.slice(2);
 
-const TYPES = { '.html': 'text/html', '.js': 'text/javascript', '.css': 'text/css', '.wasm': 'application/wasm',
-  '.json': 'application/json', '.png': 'image/png', '.jpg': 'image/jpeg' };
-const server = http.createServer((req, res) => {
-  const file = path.join(root, decodeURIComponent(new URL(req.url, 'http://x').pathname));
-  if (!file.startsWith(root) || !fs.existsSync(file) || fs.statSync(file).isDirectory()) { res.writeHead(404); return res.end(); }
-  // Cached for an hour, as a static host would: the second visit is warm.
-  res.writeHead(200, { 'content-type': TYPES[path.extname(file)] || 'application/octet-stream', 'cache-control': 'max-age=3600' });
-  res.end(fs.readFileSync(file));
-});
-await new Promise((r) => server.listen(0, '127.0.0.1', r));
-const origin = `http://127.0.0.1:${server.address().port}`;
-const context = await chromium.launchPersistentContext(fs.mkdtempSync(path.join(os.tmpdir(), 'upetrack-bench-')), {
-  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-  headless: true,
-  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
-    '--disable-background-networking', '--disable-component-update', '--disable-sync'],
-});
+// Cached for an hour, as a static host would: the second visit is warm.
+const { server, origin } = await serveRepository(root, { cache: true });
+const context = await launchChromium(fs.mkdtempSync(path.join(os.tmpdir(), 'upetrack-bench-')));
 
 const med = (xs) => [...xs].sort((a, b) => a - b)[xs.length >> 1];
 

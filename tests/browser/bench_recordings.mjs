@@ -6,8 +6,7 @@
 //   node tests/browser/bench_recordings.mjs <recording> [frames]
 //
 // Make large recordings with scripts/bench_recordings.py.
-import { chromium } from 'playwright-core';
-import http from 'node:http';
+import { serveRepository, launchChromium } from './harness.mjs';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
@@ -19,23 +18,11 @@ const [recording, framesArg] = process.argv.slice(2);
 if (!recording) { console.error('usage: node bench_recordings.mjs <recording> [frames]'); process.exit(2); }
 const frames = Number(framesArg || 150);
 
-const TYPES = { '.html': 'text/html', '.js': 'text/javascript', '.css': 'text/css', '.wasm': 'application/wasm', '.json': 'application/json' };
-const server = http.createServer((req, res) => {
-  const file = path.join(root, decodeURIComponent(new URL(req.url, 'http://x').pathname));
-  if (!file.startsWith(root) || !fs.existsSync(file) || fs.statSync(file).isDirectory()) { res.writeHead(404); return res.end(); }
-  res.writeHead(200, { 'content-type': TYPES[path.extname(file)] || 'application/octet-stream' });
-  res.end(fs.readFileSync(file));
-});
-await new Promise((r) => server.listen(0, '127.0.0.1', r));
+const { server, origin } = await serveRepository(root);
 const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'upetrack-bench-'));
-const context = await chromium.launchPersistentContext(tmp, {
-  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-  headless: true,
-  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
-    '--disable-background-networking', '--disable-component-update', '--disable-sync'],
-});
+const context = await launchChromium(tmp);
 const page = await context.newPage();
-await page.goto(`http://127.0.0.1:${server.address().port}/web/index.html?autoplay=0&speed=4`);
+await page.goto(`${origin}/web/index.html?autoplay=0&speed=4`);
 await page.evaluate(() => window.upetrack.ready);
 await page.evaluate(() => { window.__t0 = performance.now(); });
 await page.setInputFiles('#recording', recording);

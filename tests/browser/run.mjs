@@ -1,8 +1,7 @@
 // Browser tests of the demo page in headless Chromium (Debian's, driven by
 // playwright-core). Serves the repository on loopback, runs each check,
 // saves screenshots to tests/browser/artifacts/, prints "N passed, N failed".
-import { chromium } from 'playwright-core';
-import http from 'node:http';
+import { serveRepository, launchChromium } from './harness.mjs';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
@@ -15,29 +14,8 @@ const artifacts = path.join(here, 'artifacts');
 fs.mkdirSync(artifacts, { recursive: true });
 const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'upetrack-browser-'));
 
-const TYPES = { '.html': 'text/html', '.js': 'text/javascript', '.mjs': 'text/javascript', '.css': 'text/css',
-  '.wasm': 'application/wasm', '.json': 'application/json', '.png': 'image/png', '.jpg': 'image/jpeg' };
-const server = http.createServer((req, res) => {
-  const url = new URL(req.url, 'http://x');
-  const file = path.join(root, decodeURIComponent(url.pathname));
-  if (!file.startsWith(root) || !fs.existsSync(file) || fs.statSync(file).isDirectory()) {
-    const index = path.join(file, 'index.html');
-    if (fs.existsSync(index)) { res.writeHead(200, { 'content-type': 'text/html' }); return res.end(fs.readFileSync(index)); }
-    res.writeHead(404); return res.end('not found');
-  }
-  res.writeHead(200, { 'content-type': TYPES[path.extname(file)] || 'application/octet-stream' });
-  res.end(fs.readFileSync(file));
-});
-await new Promise((r) => server.listen(0, '127.0.0.1', r));
-const origin = `http://127.0.0.1:${server.address().port}`;
-
-const context = await chromium.launchPersistentContext(fs.mkdtempSync(path.join(tmp, 'profile-')), {
-  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-  headless: true,
-  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
-    '--disable-background-networking', '--disable-component-update', '--disable-sync'],
-  viewport: { width: 1280, height: 900 },
-});
+const { server, origin } = await serveRepository(root);
+const context = await launchChromium(fs.mkdtempSync(path.join(tmp, 'profile-')), { viewport: { width: 1280, height: 900 } });
 
 let passed = 0, failed = 0;
 const consoleErrors = [];
@@ -692,12 +670,8 @@ await test('webcam mode: Chromium\'s fake camera plays a synthetic rope; a click
   const gt = JSON.parse(fs.readFileSync(path.join(dir, 'groundtruth.json'), 'utf8')).frames[0].points;
   const cam = JSON.parse(fs.readFileSync(path.join(dir, 'camera_intrinsic.json'), 'utf8'));
   const fx = cam.fx ?? cam.intrinsic_matrix?.[0];
-  const ctx2 = await chromium.launchPersistentContext(fs.mkdtempSync(path.join(tmp, 'profile-cam-')), {
-    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-    headless: true,
-    args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
-      '--disable-background-networking', '--disable-component-update', '--disable-sync',
-      '--use-fake-ui-for-media-stream', '--use-fake-device-for-media-stream', `--use-file-for-fake-video-capture=${video}`],
+  const ctx2 = await launchChromium(fs.mkdtempSync(path.join(tmp, 'profile-cam-')), {
+    args: ['--use-fake-ui-for-media-stream', '--use-fake-device-for-media-stream', `--use-file-for-fake-video-capture=${video}`],
     viewport: { width: 1280, height: 900 },
   });
   const page = await ctx2.newPage();
