@@ -15,7 +15,7 @@ import { checkDlo } from './core.js';
 import { resultJson, dloJson, download } from './export.js';
 import { pageStats } from './plot.js';
 import { explainFrame, moveStep, stepName } from './explain.js';
-import { bindScenePanel, makeLongLook } from './scenes.js';
+import { bindScenePanel } from './scenes.js';
 import { startWebcam, stopWebcam } from './webcam.js';
 
 hooks.opened = async () => {
@@ -214,12 +214,9 @@ async function start() {
   }
   if (query.get('autoplay') !== '0') play();
   // The opening look: a page opened as it is (no sample, no settings)
-  // loops its sample and makes a longer scene meanwhile.
+  // loops its sample, five seconds of a rope pulled under an occluder.
   if (query.has('loop')) $('loop').checked = query.get('loop') === '1';
   else if (!query.has('sample') && !query.has('autoplay')) $('loop').checked = true;
-  if (!query.has('sample') && !query.has('autoplay') && query.get('long') !== '0') {
-    makeLongLook(first, play).catch((err) => showError(`The longer scene could not be made: ${err.message}`));
-  }
 }
 
 // Hooks for the browser tests and for scripting the page.

@@ -1,13 +1,11 @@
-// The scene generator's panel and the page's opening look: a scenario made
-// in the tab (scene-worker.js) opens like any sequence. The default page
-// plays a bundled sample in a loop and meanwhile makes a longer version of
-// it, which it switches to once ready.
-import { state, $, guarded, progress } from './state.js';
+// The scene generator's panel: a scenario made in the tab (scene-worker.js)
+// opens like any sequence.
+import { $, guarded, progress } from './state.js';
 import { openGenerated } from './sequence.js';
 import { sceneChoices } from './core.js';
 
-// The opening look: this scenario, made with these settings.
-export const LONG_LOOK = { scenario: 'dynamic-pull', frames: 150, seed: 2 };
+// The scenario the panel offers first: the opening sample's.
+const FIRST_SCENARIO = 'dynamic-pull';
 
 // Makes a scene in the scene worker; `onProgress(written, total)`.
 export function makeScene(options, onProgress) {
@@ -37,7 +35,7 @@ export function bindScenePanel() {
   fill($('scene-variant'), c.variants);
   fill($('scene-colour'), [{ name: '' }, ...c.colours.map((name) => ({ name }))]);
   $('scene-colour').options[0].textContent = "the variant's";
-  $('scene-scenario').value = LONG_LOOK.scenario;
+  $('scene-scenario').value = FIRST_SCENARIO;
   $('scene-frames').max = String(c.max_frames);
   for (const id of ['scene-occluder', 'scene-pull']) $(id).max = String(c.max_scale);
   const shown = () => {
@@ -71,19 +69,4 @@ export function bindScenePanel() {
       progress(null);
     }
   });
-}
-
-// Makes the opening look's long version and switches to it if the page is
-// still on the sample it started with; `play` restarts playback.
-export async function makeLongLook(startedOn, play) {
-  const t0 = performance.now();
-  const made = await makeScene(LONG_LOOK, (done, total) => { $('seq-details').textContent = `Making a longer scene in this tab: ${done} of ${total} frames…`; });
-  state.longLook = { ms: performance.now() - t0 };
-  $('seq-details').textContent = '';
-  if (!state.seq || state.seq.name !== startedOn || state.explain) return;
-  const playing = state.playing;
-  state.playing = false;
-  await state.busy;
-  await openGenerated(made.name, made.files);
-  if (playing) play();
 }

@@ -150,18 +150,23 @@ export function activeRects(i) {
   return flat;
 }
 
-// File bytes of frame i, read ahead at most one frame.
+// File bytes of frame i, read ahead up to READ_AHEAD frames: a fetched
+// sample's files take a round trip each, which one frame ahead did not hide.
+const READ_AHEAD = 4;
 const ahead = new Map();
 function readBoth(seq, i) {
   return Promise.all([seq.read(seq.info.color_files[i]), seq.read(seq.info.depth_files[i])]);
 }
-function prefetch(i) {
-  if (ahead.has(i)) return;
-  ahead.clear();
+function prefetch(from) {
   const seq = state.seq;
-  const p = readBoth(seq, i);
-  p.catch(() => {});
-  ahead.set(i, { seq, p });
+  const n = seq.info.color_files.length;
+  for (const [k, hit] of ahead) if (hit.seq !== seq || k < from || k >= from + READ_AHEAD) ahead.delete(k);
+  for (let i = from; i < Math.min(n, from + READ_AHEAD); i++) {
+    if (ahead.has(i)) continue;
+    const p = readBoth(seq, i);
+    p.catch(() => {});
+    ahead.set(i, { seq, p });
+  }
 }
 function readPair(i) {
   const hit = ahead.get(i);
@@ -179,8 +184,8 @@ export async function frameFields(i, track) {
   if (!seq.fromZip && !seq.fromRecording) {
     [color, depth] = await readPair(i);
     transfer.push(color, depth);
-    // Read the next frame's files while this one is decoded and tracked.
-    if (i + 1 < info.color_files.length) prefetch(i + 1);
+    // Read the next frames' files while this one is decoded and tracked.
+    prefetch(i + 1);
   }
   const fields = {
     index: i, track, color, depth, colorName: info.color_files[i], depthName: info.depth_files[i],

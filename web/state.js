@@ -21,7 +21,6 @@ export const state = {
   truthPx: null,      // ground truth of the shown frame in pixels
   mode: 'none',       // 'draw' | 'pick'
   explain: null,      // the explain mode: { index, steps, at, view, frame }, or null
-  longLook: null,     // { ms } once the opening look's longer scene is made
   webcam: null,       // the webcam mode: { stream, video, frames, depthScale }, or null
   shownAt: [],        // display timestamps, for the frame rate
   generation: 0,      // bumped when a new sequence opens

@@ -3,7 +3,8 @@
 use std::path::Path;
 use std::time::Instant;
 
-use upetrack_io::write::{write_file, y4m_frame, y4m_header};
+use upetrack_io::synthetic::SyntheticWriter;
+use upetrack_io::write::{write_file, y4m_frame, y4m_header, JPEG_QUALITY};
 use upetrack_synth::variant::D435I_1280X720;
 use upetrack_synth::{Scenario, ScenarioKind, Variant};
 
@@ -28,21 +29,21 @@ pub fn list_scenarios() {
 
 /// Writes `scenario` into `dir`; returns the number of frames written.
 pub fn write_scenario(scenario: Scenario, dir: &Path) -> Result<usize, CliError> {
-    write_scenario_and_video(scenario, dir, None)
+    write_scenario_and_video(SyntheticWriter::new(scenario), dir, None)
 }
 
 /// [`write_scenario`], and with `video` its colour frames as a `.y4m` (a
 /// fake camera's input) from the same rendering.
 fn write_scenario_and_video(
-    scenario: Scenario,
+    writer: SyntheticWriter,
     dir: &Path,
     video: Option<&Path>,
 ) -> Result<usize, CliError> {
-    let camera = scenario.camera();
+    let camera = writer.scenario().camera();
     let fps = upetrack_io::synthetic::SYNTHETIC_FPS as u32;
     let mut y4m = video.map(|_| y4m_header(camera.width, camera.height, fps));
     let n = upetrack_io::synthetic::write_scenario(
-        scenario,
+        writer,
         &mut |(path, bytes)| write_file(&dir.join(path), &bytes),
         &mut |f| {
             if let Some(out) = y4m.as_mut() {
@@ -57,9 +58,17 @@ fn write_scenario_and_video(
     Ok(n)
 }
 
-/// `upetrack synth <scenario> <dir> [--frames N] [--seed S] [--hd] [--variant V] [--y4m <video.y4m>]`.
+/// Largest `--depth-noise` multiplier.
+pub const MAX_DEPTH_NOISE: f64 = 10.0;
+
+/// `upetrack synth <scenario> <dir> [--frames N] [--seed S] [--hd] [--variant V]
+/// [--depth-noise X] [--jpeg-quality Q] [--y4m <video.y4m>]`.
 pub fn cmd_synth(raw: &[String]) -> Result<(), CliError> {
-    let args = Args::parse(raw, &["hd"], &["frames", "seed", "variant", "y4m"])?;
+    let args = Args::parse(
+        raw,
+        &["hd"],
+        &["frames", "seed", "variant", "depth-noise", "jpeg-quality", "y4m"],
+    )?;
     let [name, dir] = args.positional.as_slice() else {
         return Err(CliError(format!(
             "synth takes a scenario and a folder\n\n{USAGE}"
@@ -90,10 +99,22 @@ pub fn cmd_synth(raw: &[String]) -> Result<(), CliError> {
     if args.flag("hd") {
         render.camera = D435I_1280X720;
     }
+    let depth_noise: f64 = args.number("depth-noise", 1.0)?;
+    if !(0.0..=MAX_DEPTH_NOISE).contains(&depth_noise) {
+        return Err(CliError(format!(
+            "--depth-noise must be in 0..={MAX_DEPTH_NOISE}"
+        )));
+    }
+    render.depth_noise_multiplier *= depth_noise;
+    let quality: u8 = args.number("jpeg-quality", JPEG_QUALITY)?;
+    if !(1..=100).contains(&quality) {
+        return Err(CliError("--jpeg-quality must be in 1..=100".into()));
+    }
     let start = Instant::now();
     let scenario = Scenario::with_rope(kind, frames, seed, render, variant.rope());
+    let writer = SyntheticWriter::new(scenario).with_jpeg_quality(quality);
     let video = args.value("y4m");
-    let n = write_scenario_and_video(scenario, Path::new(dir), video.map(Path::new))?;
+    let n = write_scenario_and_video(writer, Path::new(dir), video.map(Path::new))?;
     if let Some(video) = video {
         eprintln!("{video}: the {n} colour frames as a .y4m video");
     }

@@ -9,7 +9,7 @@ use crate::sequence::{
     DloConfig, GroundTruthFile, GroundTruthFrame, IntrinsicsFile, OcclusionConfig,
     SegmentationConfig,
 };
-use crate::write::{encode_depth_png, encode_jpeg, json_bytes, JPEG_QUALITY};
+use crate::write::{compact_json_bytes, encode_depth_png, encode_jpeg, json_bytes, JPEG_QUALITY};
 
 /// Frames per second of every synthetic sequence.
 pub const SYNTHETIC_FPS: f64 = 30.0;
@@ -30,6 +30,7 @@ fn json<T: serde::Serialize>(path: &str, value: &T) -> Result<SequenceFile, Sequ
 pub struct SyntheticWriter {
     scenario: Scenario,
     groundtruth: GroundTruthFile,
+    jpeg_quality: u8,
 }
 
 impl SyntheticWriter {
@@ -38,7 +39,15 @@ impl SyntheticWriter {
         Self {
             scenario,
             groundtruth: GroundTruthFile::default(),
+            jpeg_quality: JPEG_QUALITY,
         }
+    }
+
+    /// The same writer encoding colour at JPEG `quality` (1..=100, clamped)
+    /// instead of [`JPEG_QUALITY`]: smaller files for a bundled sample.
+    pub fn with_jpeg_quality(mut self, quality: u8) -> Self {
+        self.jpeg_quality = quality.clamp(1, 100);
+        self
     }
 
     /// The scenario being written.
@@ -95,7 +104,7 @@ impl SyntheticWriter {
         };
         see(&f)?;
         let name = format!("{:06}", f.index);
-        let jpg = encode_jpeg(camera.width, camera.height, &f.rgb, JPEG_QUALITY)?;
+        let jpg = encode_jpeg(camera.width, camera.height, &f.rgb, self.jpeg_quality)?;
         let png = encode_depth_png(camera.width, camera.height, &f.depth)?;
         self.groundtruth.frames.push(GroundTruthFrame {
             frame: f.index,
@@ -112,9 +121,11 @@ impl SyntheticWriter {
         ]))
     }
 
-    /// `groundtruth.json` of the frames written so far.
+    /// `groundtruth.json` of the frames written so far, without
+    /// indentation (half the size of pretty JSON for the same numbers).
     pub fn groundtruth(&self) -> Result<SequenceFile, SequenceError> {
-        json("groundtruth.json", &self.groundtruth)
+        let path = "groundtruth.json";
+        Ok((path.into(), compact_json_bytes(path, &self.groundtruth)?))
     }
 
     /// Frames written so far.
@@ -123,14 +134,13 @@ impl SyntheticWriter {
     }
 }
 
-/// Writes every file of `scenario` through `put`, showing `see` each
+/// Writes every file of `w`'s scenario through `put`, showing `see` each
 /// rendered frame; returns the frame count.
 pub fn write_scenario(
-    scenario: Scenario,
+    mut w: SyntheticWriter,
     put: &mut dyn FnMut(SequenceFile) -> Result<(), SequenceError>,
     see: &mut dyn FnMut(&SynthFrame) -> Result<(), SequenceError>,
 ) -> Result<usize, SequenceError> {
-    let mut w = SyntheticWriter::new(scenario);
     for f in w.header()? {
         put(f)?;
     }

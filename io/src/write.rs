@@ -143,13 +143,25 @@ pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), SequenceError> {
     std::fs::write(path, bytes).map_err(|e| io_err(path, e))
 }
 
-/// `value` as pretty JSON (the layout every written file has); `path`
-/// names the file in errors.
+/// `value` as pretty JSON (the layout of the files people read: settings,
+/// results); `path` names the file in errors.
 pub fn json_bytes<T: serde::Serialize>(path: &str, value: &T) -> Result<Vec<u8>, SequenceError> {
-    serde_json::to_vec_pretty(value).map_err(|e| SequenceError::Json {
+    serde_json::to_vec_pretty(value).map_err(|e| json_error(path, e))
+}
+
+/// `value` as JSON without indentation (for files of many numbers).
+pub fn compact_json_bytes<T: serde::Serialize>(
+    path: &str,
+    value: &T,
+) -> Result<Vec<u8>, SequenceError> {
+    serde_json::to_vec(value).map_err(|e| json_error(path, e))
+}
+
+fn json_error(path: &str, e: serde_json::Error) -> SequenceError {
+    SequenceError::Json {
         path: path.to_string(),
         message: e.to_string(),
-    })
+    }
 }
 
 /// Writes `value` as pretty JSON to `path`.
