@@ -675,3 +675,82 @@ fn a_thin_cable_is_placed_on_its_axis_in_depth() {
     assert!(mean(&clear) < 1.5, "{:.2} mm", mean(&clear));
     assert!(mean(&clear) < 0.5 * mean(&clear_fixed));
 }
+
+/// The bundled opening sample's options: `--depth-noise 0` removes the
+/// disparity noise (the flat table's depth spread collapses), `--jpeg-quality`
+/// makes smaller colour files, and values out of range are refused.
+#[test]
+fn synth_depth_noise_and_jpeg_quality_take_effect_and_are_checked() {
+    let write = |name: &str, extra: &[&str]| {
+        let dir = temp_dir(name);
+        let mut args = vec![
+            "synth",
+            "static-s",
+            dir.to_str().expect("utf-8"),
+            "--frames",
+            "1",
+        ];
+        args.extend_from_slice(extra);
+        let out = run(&args);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        dir
+    };
+    // Spread of the depth over the image's top-left corner (table only).
+    let spread = |dir: &PathBuf| {
+        let seq = Sequence::open(FolderSource::new(dir)).expect("opens");
+        let f = seq.frame(0).expect("decodes");
+        let w = f.width as usize;
+        let vals: Vec<f64> = (0..60)
+            .flat_map(|v| (0..80).map(move |u| v * w + u))
+            .map(|k| f.depth[k])
+            .filter(|&d| d > 0)
+            .map(f64::from)
+            .collect();
+        let mean = vals.iter().sum::<f64>() / vals.len() as f64;
+        (vals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / vals.len() as f64).sqrt()
+    };
+    let noisy = write("noise-default", &[]);
+    let quiet = write("noise-off", &["--depth-noise", "0", "--jpeg-quality", "60"]);
+    let (a, b) = (spread(&noisy), spread(&quiet));
+    assert!(
+        a > 0.7 && b < 0.3,
+        "depth spread {a} mm with noise, {b} mm without"
+    );
+    let size = |dir: &PathBuf| {
+        std::fs::metadata(dir.join("color/000000.jpg"))
+            .expect("jpg")
+            .len()
+    };
+    assert!(
+        size(&quiet) < size(&noisy) * 3 / 4,
+        "{} vs {} bytes",
+        size(&quiet),
+        size(&noisy)
+    );
+    for bad in [
+        ["--depth-noise", "NaN"],
+        ["--depth-noise", "-1"],
+        ["--jpeg-quality", "0"],
+        ["--jpeg-quality", "101"],
+    ] {
+        let dir = temp_dir("bad-synth-option");
+        let out = run(&[
+            "synth",
+            "static-s",
+            dir.to_str().expect("utf-8"),
+            "--frames",
+            "1",
+            bad[0],
+            bad[1],
+        ]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && err.contains(&bad[0][2..]),
+            "{bad:?}: {err}"
+        );
+    }
+}
