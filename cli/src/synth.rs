@@ -67,7 +67,14 @@ pub fn cmd_synth(raw: &[String]) -> Result<(), CliError> {
     let args = Args::parse(
         raw,
         &["hd"],
-        &["frames", "seed", "variant", "depth-noise", "jpeg-quality", "y4m"],
+        &[
+            "frames",
+            "seed",
+            "variant",
+            "depth-noise",
+            "jpeg-quality",
+            "y4m",
+        ],
     )?;
     let [name, dir] = args.positional.as_slice() else {
         return Err(CliError(format!(
