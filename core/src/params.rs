@@ -123,6 +123,8 @@ impl Params {
                 hidden_motion: crate::upe::occlusion::HiddenMotion::Paper,
                 free_space: false,
                 conserve_length: false,
+                across_rope_displacement: false,
+                smooth_resampling: false,
                 ..upe
             },
             ..Self::default()
@@ -285,6 +287,7 @@ mod tests {
             crate::upe::occlusion::HiddenMotion::Paper
         );
         assert!(!p.upetrack.free_space && !p.upetrack.conserve_length);
+        assert!(!p.upetrack.across_rope_displacement && !p.upetrack.smooth_resampling);
         // Everything else is the defaults'.
         let d = Params::default();
         assert_eq!(

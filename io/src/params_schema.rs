@@ -265,6 +265,20 @@ pub const PARAMETERS: &[ParamInfo] = &[
         ParamKind::Bool,
     ),
     p(
+        "across_rope_displacement",
+        Upetrack,
+        "D_k across",
+        "Hidden nodes follow the known nodes' motion across the rope, not their slide along it (Eq. 6)",
+        ParamKind::Bool,
+    ),
+    p(
+        "smooth_resampling",
+        Upetrack,
+        "smooth",
+        "Resample along a smooth curve through the nodes, not their polyline (Eq. 12-15)",
+        ParamKind::Bool,
+    ),
+    p(
         "outlier_weight",
         Upetrack,
         "w",

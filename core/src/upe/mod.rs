@@ -17,7 +17,7 @@ use free_space::{clear_free_space, FreeSpaceReport};
 use length::{conserve_end_lengths, LengthReport};
 use occlusion::{estimate_hidden_with_sweeps, HiddenMotion, UpeCoefficients, UpeReport};
 use registration::{register_observed, EmReport, EmSettings, MAX_EM_ITERATIONS};
-use resampling::resample_uniform;
+use resampling::{resample_smooth, resample_uniform};
 
 use alloc::vec::Vec;
 
@@ -58,6 +58,16 @@ pub struct UpeTrackParams {
     /// Move hidden runs out of free space: where the images show nothing
     /// that could hide them (`perception::evidence`). Default true.
     pub free_space: bool,
+    /// Take only the known nodes' displacement across the rope as `D_k` of
+    /// Eq. 6 (its component along the previous tangent removed): a node's
+    /// slide along the rope under EM is its parameterisation, not the
+    /// rope's motion. Default true; false is the paper's `D_k`.
+    pub across_rope_displacement: bool,
+    /// Resample (Eq. 12-15) along the centripetal Catmull-Rom curve through
+    /// the nodes rather than along their polyline, so that resampling does
+    /// not cut a bend's corners every frame. Default true; false is the
+    /// paper's polyline.
+    pub smooth_resampling: bool,
     /// Weight of the uniform outlier component (`w`, Eq. 3). Default 0.1.
     pub outlier_weight: f64,
     /// EM stops when no node moves more than this in an iteration, metres. Default 0.1 mm.
@@ -81,6 +91,8 @@ impl Default for UpeTrackParams {
             hidden_motion: HiddenMotion::SlideEnds,
             conserve_length: true,
             free_space: true,
+            across_rope_displacement: true,
+            smooth_resampling: true,
             outlier_weight: 0.1,
             em_tolerance: 1e-4,
             em_max_iterations: 10,
@@ -132,6 +144,7 @@ impl UpeTrackParams {
             displacement_weight: self.displacement_weight,
             end_displacement_weight: self.end_displacement_weight,
             hidden_motion: self.hidden_motion,
+            across_rope_displacement: self.across_rope_displacement,
         }
     }
 
@@ -235,7 +248,11 @@ fn run_step(
         (Some(e), true) => clear_free_space(&mut nodes, input.visible, e),
         _ => FreeSpaceReport::default(),
     };
-    let resampled = resample_uniform(&nodes, input.previous.len());
+    let resampled = if settings.smooth_resampling {
+        resample_smooth(&nodes, input.previous.len())
+    } else {
+        resample_uniform(&nodes, input.previous.len())
+    };
     if let Some(t) = trace {
         t.before_resampling = nodes;
         t.resampled = resampled.clone();

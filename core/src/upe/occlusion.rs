@@ -30,6 +30,9 @@ pub struct UpeCoefficients {
     pub end_displacement_weight: f64,
     /// Where the displacement estimate `y'` comes from.
     pub hidden_motion: HiddenMotion,
+    /// `D_k` of Eq. 6 without its component along the rope (this project's
+    /// decision; false gives the paper's).
+    pub across_rope_displacement: bool,
 }
 
 /// The displacement estimate `y'` of a hidden node (Eq. 11's first term).
@@ -90,7 +93,14 @@ fn estimate_node_with(
     displacement_estimate: Option<Vec3>,
 ) -> Vec3 {
     let g = c.displacement_decay;
-    let disp = |k: usize| now[k] - prev[k];
+    let disp = |k: usize| {
+        let d = now[k] - prev[k];
+        if c.across_rope_displacement {
+            across_rope(d, prev, k)
+        } else {
+            d
+        }
+    };
     let y_disp = displacement_estimate.unwrap_or_else(|| {
         prev[m] + (disp(n1) + disp(n2) * g + disp(n3) * (g * g)) / (1.0 + g + g * g)
     });
@@ -108,6 +118,21 @@ fn estimate_node_with(
     let y_geom = straight + bending * c.curvature_retention;
 
     y_disp * c.displacement_weight + y_geom * (1.0 - c.displacement_weight)
+}
+
+/// `d` without its component along the rope at node `k` of `chain` (the
+/// central difference of its neighbours as the tangent; `d` itself where
+/// the chain gives no direction).
+pub fn across_rope(d: Vec3, chain: &[Vec3], k: usize) -> Vec3 {
+    let last = chain.len().saturating_sub(1);
+    let tangent = chain[(k + 1).min(last)] - chain[k.saturating_sub(1)];
+    let n = math::norm(&tangent);
+    if n > math::LENGTH_EPSILON {
+        let t = tangent / n;
+        d - t * d.dot(&t)
+    } else {
+        d
+    }
 }
 
 /// A hidden run at an end of the rope uses `end_displacement_weight` only
@@ -297,6 +322,7 @@ mod tests {
         displacement_weight: 0.75,
         end_displacement_weight: 0.75,
         hidden_motion: HiddenMotion::Paper,
+        across_rope_displacement: false,
     };
 
     #[test]
@@ -345,6 +371,7 @@ mod tests {
             bending_resistance: 1.0,
             displacement_decay: 0.8,
             hidden_motion: HiddenMotion::Paper,
+            across_rope_displacement: false,
         };
         let prev = vec![
             Vec3::new(-1.0, 0.0, 0.0),
@@ -686,9 +713,60 @@ mod tests {
                     HiddenMotion::SlideEnds,
                     HiddenMotion::Slide,
                 ][case % 3],
+                across_rope_displacement: case % 2 == 0,
             };
             estimate_hidden(&mut nodes, &known, &prev, &c);
             assert!(nodes.iter().all(math::is_finite), "case {case}");
+        }
+    }
+
+    /// EM slides known nodes along a resting rope (their parameterisation);
+    /// with `across_rope_displacement` a hidden node of Eq. 6-7 ignores the
+    /// slide and still follows a move across the rope, as the paper's `D_k`
+    /// does.
+    #[test]
+    fn a_slide_of_the_known_nodes_along_the_rope_does_not_move_a_hidden_one() {
+        let prev: Vec<Vec3> = (0..9)
+            .map(|i| Vec3::new(0.03 * i as f64, 0.0, 0.6))
+            .collect();
+        let known: Vec<bool> = (0..9).map(|i| !(3..6).contains(&i)).collect();
+        let shifted = |d: Vec3| -> Vec<Vec3> {
+            prev.iter()
+                .enumerate()
+                .map(|(i, p)| if known[i] { p + d } else { *p })
+                .collect()
+        };
+        let c = |across| UpeCoefficients {
+            displacement_weight: 1.0,
+            across_rope_displacement: across,
+            ..PAPER
+        };
+        let slide = Vec3::new(0.005, 0.0, 0.0);
+        let mut paper = shifted(slide);
+        estimate_hidden(&mut paper, &known, &prev, &c(false));
+        let mut across = shifted(slide);
+        estimate_hidden(&mut across, &known, &prev, &c(true));
+        for m in 3..6 {
+            assert!(
+                (paper[m] - (prev[m] + slide)).norm() < 1e-12,
+                "paper node {m}: {:?}",
+                paper[m]
+            );
+            assert!(
+                (across[m] - prev[m]).norm() < 1e-12,
+                "across node {m}: {:?}",
+                across[m]
+            );
+        }
+        let lift = Vec3::new(0.0, 0.004, 0.0);
+        let mut moved = shifted(lift);
+        estimate_hidden(&mut moved, &known, &prev, &c(true));
+        for m in 3..6 {
+            assert!(
+                (moved[m] - (prev[m] + lift)).norm() < 1e-12,
+                "node {m}: {:?}",
+                moved[m]
+            );
         }
     }
 }
