@@ -642,12 +642,15 @@ fn a_state_far_from_the_rope_in_view_is_recovered_from_the_images() {
 fn a_gripper_hiding_the_held_end_does_not_drag_it_off_along_its_arm() {
     let v = Variant::parse("hd-tilted-red").expect("variant");
     let (_, ours) = track_scenario_in(ScenarioKind::GripperSwing, v, 90, Params::default());
-    // The rules before the fix: hidden ends carried by Eq. 6-7 alone, with
-    // no length cap and no free-space check.
+    // The rules before the fix: hidden ends carried by Eq. 6-7 alone (with
+    // the paper's D_k, which hands EM's slide along the arm to the hidden
+    // end), no length cap, no free-space check, polyline resampling.
     let mut before = Params::default();
     before.upetrack.hidden_motion = upetrack::upe::occlusion::HiddenMotion::Paper;
     before.upetrack.conserve_length = false;
     before.upetrack.free_space = false;
+    before.upetrack.across_rope_displacement = false;
+    before.upetrack.smooth_resampling = false;
     let (_, theirs) = track_scenario_in(ScenarioKind::GripperSwing, v, 90, before);
     eprintln!(
         "gripper@hd-tilted-red: occluded mean {:.2} mm, max {:.2} mm; before the fix {:.2} mm, max {:.2} mm",
