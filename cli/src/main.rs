@@ -22,6 +22,7 @@ upetrack: track a rope in RGB-D sequences (UPETrack)
 USAGE:
   upetrack track <sequence> --out <result.json> [--algorithm A] [--params <params.json>]
   upetrack eval <sequence>... [--algorithm A,B,..] [--params <params.json>] [--json <out.json>] [--markdown <out.md>] [--per-frame <out.csv>]
+  upetrack score <sequence> <result.json>... [--json <out.json>] [--markdown <out.md>]
   upetrack compare [--data <dir>] [--frames N] [--json <out.json>] [--markdown <out.md>] [--update <page.md>]
   upetrack synth <scenario> <dir> [--frames N] [--seed S] [--hd] [--variant V]
                  [--depth-noise X] [--jpeg-quality Q] [--y4m <video.y4m>]
@@ -330,6 +331,55 @@ fn cmd_eval(raw: &[String]) -> Result<(), CliError> {
     Ok(())
 }
 
+/// `upetrack score <sequence> <result.json>...`: the eval table of result
+/// files written by any tracker in the contract's layout, against the
+/// sequence's ground truth.
+fn cmd_score(raw: &[String]) -> Result<(), CliError> {
+    let args = Args::parse(raw, &[], &with_recording_options(&["json", "markdown"]))?;
+    let [path, results @ ..] = args.positional.as_slice() else {
+        return Err(CliError(format!(
+            "score takes a sequence and result files\n\n{USAGE}"
+        )));
+    };
+    if results.is_empty() {
+        return Err(CliError(format!(
+            "score takes a sequence and result files\n\n{USAGE}"
+        )));
+    }
+    let seq = open_sequence(path, &RecordingArgs::from(&args)?)?;
+    let name = Path::new(path)
+        .file_name()
+        .map_or(path.clone(), |n| n.to_string_lossy().into_owned());
+    let mut rows = Vec::new();
+    for r in results {
+        let result = upetrack_io::result::read_result(Path::new(r))?;
+        let frames: Vec<usize> = result.frames.iter().map(|f| f.frame).collect();
+        if frames != (0..seq.len()).collect::<Vec<_>>() {
+            return Err(CliError(format!(
+                "{r}: frames must be 0..{} in order, one entry each, as the sequence has (found {})",
+                seq.len(),
+                frames.len()
+            )));
+        }
+        rows.push(summarise(
+            &name,
+            &result,
+            &seq.groundtruth,
+            &seq.camera,
+            seq.first_occluded_frame(),
+        ));
+    }
+    let table = markdown_table(&rows);
+    println!("{table}");
+    if let Some(p) = args.value("json") {
+        upetrack_io::write::write_json(Path::new(p), &rows)?;
+    }
+    if let Some(p) = args.value("markdown") {
+        upetrack_io::write::write_file(Path::new(p), table.as_bytes())?;
+    }
+    Ok(())
+}
+
 /// Tracks `seq` with `params` and summarises the errors against its ground truth.
 fn evaluate(
     seq: &AnySequence,
@@ -382,6 +432,7 @@ fn run(raw: &[String]) -> Result<(), CliError> {
     match cmd.as_str() {
         "track" => cmd_track(rest),
         "eval" => cmd_eval(rest),
+        "score" => cmd_score(rest),
         "compare" => compare::cmd_compare(rest),
         "synth" => synth::cmd_synth(rest),
         "bench" => bench::cmd_bench(rest),

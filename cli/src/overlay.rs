@@ -52,10 +52,7 @@ pub fn cmd_overlay(raw: &[String]) -> Result<(), CliError> {
         )));
     };
     let seq = open_sequence(seq_path, &crate::RecordingArgs::from(&args)?)?;
-    let text = std::fs::read_to_string(result_path)
-        .map_err(|e| CliError(format!("{result_path}: {e}")))?;
-    let result: TrackResult = serde_json::from_str(&text)
-        .map_err(|e| CliError(format!("{result_path}: invalid result: {e}")))?;
+    let result: TrackResult = upetrack_io::result::read_result(Path::new(result_path))?;
     let index: usize = frame
         .parse()
         .map_err(|_| CliError(format!("`{frame}` is not a frame number")))?;

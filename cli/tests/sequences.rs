@@ -783,3 +783,61 @@ fn synth_depth_noise_and_jpeg_quality_take_effect_and_are_checked() {
         );
     }
 }
+
+/// `upetrack score` tables a result file written by any tracker as `eval`
+/// tables the command's own run, and refuses one that does not fit the
+/// sequence (a frame missing, a node that is not a number).
+#[test]
+fn score_tables_a_result_file_as_eval_does_and_refuses_one_that_does_not_fit() {
+    let dir = temp_dir("score");
+    synth("dynamic-pull", 12, &dir);
+    let seq = dir.to_string_lossy().to_string();
+    let out = dir.join("result.json");
+    let o = run(&["track", &seq, "--out", &out.to_string_lossy()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let row = |text: &str| {
+        text.lines()
+            .find(|l| l.contains("| upetrack |"))
+            .map(|l| l.split('|').skip(3).take(13).collect::<Vec<_>>().join("|"))
+            .unwrap_or_default()
+    };
+    let eval = run(&["eval", &seq]);
+    let score = run(&["score", &seq, &out.to_string_lossy()]);
+    assert!(
+        score.status.success(),
+        "{}",
+        String::from_utf8_lossy(&score.stderr)
+    );
+    let (e, s) = (
+        String::from_utf8_lossy(&eval.stdout),
+        String::from_utf8_lossy(&score.stdout),
+    );
+    assert!(
+        !row(&e).is_empty() && row(&e) == row(&s),
+        "eval:\n{e}\nscore:\n{s}"
+    );
+    // Another tracker's file: `params` empty, a frame dropped, a NaN node.
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).expect("result")).expect("json");
+    v["params"] = serde_json::json!({});
+    v["algorithm"] = serde_json::json!("theirs");
+    let foreign = dir.join("theirs.json");
+    std::fs::write(&foreign, v.to_string()).expect("write");
+    let o = run(&["score", &seq, &foreign.to_string_lossy()]);
+    assert!(o.status.success() && String::from_utf8_lossy(&o.stdout).contains("| theirs |"));
+    let mut short = v.clone();
+    short["frames"].as_array_mut().expect("frames").pop();
+    std::fs::write(&foreign, short.to_string()).expect("write");
+    let o = run(&["score", &seq, &foreign.to_string_lossy()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("frames must be 0..12"),
+        "{err}"
+    );
+    let mut nan = v.clone();
+    nan["frames"][3]["nodes"][0][0] = serde_json::json!("NaN");
+    std::fs::write(&foreign, nan.to_string().replace("\"NaN\"", "1e999")).expect("write");
+    let o = run(&["score", &seq, &foreign.to_string_lossy()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("theirs.json"), "{err}");
+}

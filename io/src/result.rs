@@ -39,3 +39,28 @@ pub struct TrackResult {
     /// One entry per frame, in order.
     pub frames: Vec<FrameRecord>,
 }
+
+/// Reads a result file: this project's, or another tracker's written in the
+/// contract's layout (`params` may be `{}`: missing parameters read as the
+/// defaults). Every node must be finite.
+pub fn read_result(path: &std::path::Path) -> Result<TrackResult, crate::SequenceError> {
+    let name = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|source| crate::SequenceError::Io {
+        path: name.clone(),
+        source,
+    })?;
+    let result: TrackResult =
+        serde_json::from_str(&text).map_err(|e| crate::SequenceError::Json {
+            path: name.clone(),
+            message: e.to_string(),
+        })?;
+    for f in &result.frames {
+        if f.nodes.iter().flatten().any(|c| !c.is_finite()) {
+            return Err(crate::SequenceError::invalid(
+                &name,
+                format!("frame {}: a node is not finite", f.frame),
+            ));
+        }
+    }
+    Ok(result)
+}

@@ -27,14 +27,14 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.abspath(os.path.join(HERE, "..", "..", ".."))
-UPSTREAM = sys.argv[1] if len(sys.argv) > 1 else os.path.join(ROOT, "..", "shared", "upstream", "trackdlo")
+UPSTREAM = os.environ.get("TRACKDLO_UPSTREAM") or os.path.join(ROOT, "..", "shared", "upstream", "trackdlo")
 
 # trackdlo_eval.launch
 PARAMS = dict(visibility_threshold=0.005, beta=0.5, lambda_=50000.0, alpha=3.0, k_vis=500.0, mu=0.1,
               max_iter=50, tol=0.0002, beta_pre_proc=3.0, lambda_pre_proc=1.0, lle_weight=10.0)
 
 
-def build(tmp):
+def build(tmp, driver="driver.cpp", extra=()):
     src = os.path.join(UPSTREAM, "trackdlo")
     header = open(os.path.join(src, "include", "trackdlo.h")).read()
     keep = []
@@ -67,8 +67,8 @@ def build(tmp):
     exe = os.path.join(tmp, "driver")
     # Assertions on (no NDEBUG): Eigen's bounds checks are what abort upstream.
     cmd = ["g++", "-O2", "-std=c++14", "-I/usr/include/eigen3", "-I" + os.path.join(tmp, "include"),
-           os.path.join(HERE, "driver.cpp"), os.path.join(tmp, "src", "trackdlo.cpp"),
-           os.path.join(tmp, "src", "utils.cpp"), "-o", exe]
+           os.path.join(HERE, driver), os.path.join(tmp, "src", "trackdlo.cpp"),
+           os.path.join(tmp, "src", "utils.cpp"), "-o", exe, *extra]
     subprocess.run(cmd, check=True)
     return exe
 
@@ -163,6 +163,9 @@ def run(exe, c):
 
 
 def main():
+    global UPSTREAM
+    if len(sys.argv) > 1:
+        UPSTREAM = sys.argv[1]
     with tempfile.TemporaryDirectory() as tmp:
         exe = build(tmp)
         result = []
