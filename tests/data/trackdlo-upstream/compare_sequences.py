@@ -16,6 +16,8 @@ edge drawing the ROS node uses. For each sequence folder given it then
     cargo build --release -p upetrack-cli
     python3 tests/data/trackdlo-upstream/compare_sequences.py target/compare-data/static-s-150f-seed1 ...
 
+KEEP_DIR=<dir> keeps the built driver and both result files there.
+
 Single-colour mode with the sequence's own HSV range (the evaluation launch
 file's multi-colour thresholds are fixed to blue, red and yellow ropes).
 """
@@ -73,8 +75,12 @@ def main():
     seqs = sys.argv[1:]
     if not seqs:
         raise SystemExit(__doc__)
-    with tempfile.TemporaryDirectory() as tmp:
-        exe = build(tmp, "sequence_driver.cpp", OPENCV)
+    sys.stdout.reconfigure(line_buffering=True)
+    keep = os.environ.get("KEEP_DIR")  # keeps the driver and both results there
+    with tempfile.TemporaryDirectory() as scratch:
+        tmp = keep or scratch
+        os.makedirs(tmp, exist_ok=True)
+        exe = build(tempfile.mkdtemp(dir=tmp), "sequence_driver.cpp", OPENCV)
         for seq in seqs:
             name = os.path.basename(os.path.normpath(seq))
             ours = os.path.join(tmp, f"{name}.ours.json")
@@ -84,6 +90,8 @@ def main():
             upstream = os.path.join(tmp, f"{name}.upstream.json")
             with open(upstream, "w") as out:
                 r = subprocess.run([exe], input=job(seq, init), stdout=out, stderr=subprocess.PIPE, text=True)
+            if r.stderr and r.returncode == 0:
+                sys.stderr.write(r.stderr)
             if r.returncode != 0:
                 print(f"{name}: upstream stopped: {r.stderr.strip()}", file=sys.stderr)
                 continue

@@ -66,7 +66,7 @@ def build(tmp, driver="driver.cpp", extra=()):
     open(os.path.join(tmp, "src", "trackdlo.cpp"), "w").write(track)
     exe = os.path.join(tmp, "driver")
     # Assertions on (no NDEBUG): Eigen's bounds checks are what abort upstream.
-    cmd = ["g++", "-O2", "-std=c++14", "-I/usr/include/eigen3", "-I" + os.path.join(tmp, "include"),
+    cmd = ["g++", "-O2", "-std=c++17", "-I/usr/include/eigen3", "-I" + os.path.join(tmp, "include"),
            os.path.join(HERE, driver), os.path.join(tmp, "src", "trackdlo.cpp"),
            os.path.join(tmp, "src", "utils.cpp"), "-o", exe, *extra]
     subprocess.run(cmd, check=True)

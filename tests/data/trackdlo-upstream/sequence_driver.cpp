@@ -4,7 +4,8 @@
 // sources in ../shared/upstream/trackdlo (never copied into this repository).
 //
 // Per frame, as the node's callback: BGR to HSV and one colour range
-// (the node's single-colour mode), the occluder rectangles removed from the
+// (the node's single-colour mode; a hue range through 0 as two, as its
+// multi-colour mode does for red), the occluder rectangles removed from the
 // mask (the node's occlusion mask), every mask pixel deprojected with its
 // depth (zero depth included, as the node does), a voxel grid of the node's
 // leaf size (PCL's VoxelGrid: the centroid of each occupied voxel, voxels
@@ -25,6 +26,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <iomanip>
 #include <iostream>
 #include <map>
@@ -130,7 +132,16 @@ int main() {
             }
             cv::Mat hsv_image, mask;
             cv::cvtColor(bgr, hsv_image, cv::COLOR_BGR2HSV);
-            cv::inRange(hsv_image, cv::Scalar(hsv[0], hsv[1], hsv[2]), cv::Scalar(hsv[3], hsv[4], hsv[5]), mask);
+            if (hsv[0] <= hsv[3]) {
+                cv::inRange(hsv_image, cv::Scalar(hsv[0], hsv[1], hsv[2]), cv::Scalar(hsv[3], hsv[4], hsv[5]), mask);
+            } else {
+                // A hue range through 0 (red): two ranges OR'd, as the
+                // node's multi-colour mode does for red.
+                cv::Mat below;
+                cv::inRange(hsv_image, cv::Scalar(hsv[0], hsv[1], hsv[2]), cv::Scalar(179, hsv[4], hsv[5]), mask);
+                cv::inRange(hsv_image, cv::Scalar(0, hsv[1], hsv[2]), cv::Scalar(hsv[3], hsv[4], hsv[5]), below);
+                cv::bitwise_or(mask, below, mask);
+            }
             for (const auto &r : occluders) {
                 cv::Rect clipped = r & cv::Rect(0, 0, mask.cols, mask.rows);
                 if (clipped.area() > 0) mask(clipped).setTo(0);
@@ -172,6 +183,11 @@ int main() {
                 cv::line(edges, cv::Point(c1, r1), cv::Point(c2, r2), cv::Scalar(255, 255, 255), pixel_width);
             }
             std::sort(visible_nodes.begin(), visible_nodes.end());
+            if (const char *dbg = std::getenv("TRACKDLO_DEBUG_FRAME"); dbg && std::atoi(dbg) == f) {
+                std::cerr << "frame " << f << ": " << pts.size() << " mask points, " << X.rows() << " voxels; nearest mm:";
+                for (int i = 0; i < m; i++) std::cerr << " " << i << ":" << nearest[i] * 1000.0;
+                std::cerr << "\n";
+            }
             if (visible_nodes.empty()) {
                 // The node indexes visible_nodes[size - 1] here and crashes.
                 std::cerr << "frame " << f << ": no visible node (upstream's node would crash)\n";
