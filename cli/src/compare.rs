@@ -275,8 +275,10 @@ pub fn cmd_compare(raw: &[String]) -> Result<(), CliError> {
             "params",
             "algorithm",
             "only",
+            "figures",
         ],
     )?;
+    let figures = args.value("figures").map(PathBuf::from);
     let data = PathBuf::from(args.value("data").unwrap_or("target/compare-data"));
     let frames = match args.value("frames") {
         None => None,
@@ -300,8 +302,15 @@ pub fn cmd_compare(raw: &[String]) -> Result<(), CliError> {
         }
         let dir = ensure_sequence(&data, &case)?;
         let seq = open_sequence(&dir.to_string_lossy(), &crate::RecordingArgs::default())?;
+        let mut runs = Vec::new();
         for &a in &algorithms {
-            let (summary, _) = evaluate(&seq, &name, with_algorithm(params, a))?;
+            let (summary, result) = evaluate(&seq, &name, with_algorithm(params, a))?;
+            if figures.is_some() && FIGURE_SCENES.contains(&name.as_str()) {
+                runs.push((
+                    a.name(),
+                    upetrack_io::eval::frame_errors(&result, &seq.groundtruth, &seq.camera),
+                ));
+            }
             eprintln!(
                 "{name:14} {:9} occluded mean {:>6} mm, median track {:.2} ms",
                 a.name(),
@@ -319,6 +328,16 @@ pub fn cmd_compare(raw: &[String]) -> Result<(), CliError> {
                 });
             }
             summaries.push(summary);
+        }
+        if let (Some(dir), false) = (&figures, runs.is_empty()) {
+            let series: Vec<crate::figure::Series<'_>> = runs
+                .iter()
+                .map(|(n, e)| crate::figure::Series { name: n, errors: e })
+                .collect();
+            let svg = crate::figure::frame_error_svg(&name, &series, seq.first_occluded_frame());
+            let path = dir.join(format!("frame-error-{name}.svg"));
+            upetrack_io::write::write_file(&path, svg.as_bytes())?;
+            eprintln!("{}: the frame errors of {name}", path.display());
         }
     }
     let frames_note = match frames {
@@ -353,6 +372,9 @@ pub fn cmd_compare(raw: &[String]) -> Result<(), CliError> {
     }
     Ok(())
 }
+
+/// The scenes `--figures` draws: the paper's two (its Fig. 9 and 10).
+const FIGURE_SCENES: [&str; 2] = ["static-s", "dynamic-pull"];
 
 /// Replaces what lies between the markers of `page` with `text`.
 fn update_page(page: &Path, text: &str) -> Result<(), CliError> {

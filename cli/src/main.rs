@@ -3,6 +3,7 @@
 
 mod bench;
 mod compare;
+mod figure;
 mod overlay;
 mod recording;
 mod synth;
@@ -23,7 +24,7 @@ USAGE:
   upetrack track <sequence> --out <result.json> [--algorithm A] [--params <params.json>]
   upetrack eval <sequence>... [--algorithm A,B,..] [--params <params.json>] [--json <out.json>] [--markdown <out.md>] [--per-frame <out.csv>]
   upetrack score <sequence> <result.json>... [--json <out.json>] [--markdown <out.md>]
-  upetrack compare [--data <dir>] [--frames N] [--json <out.json>] [--markdown <out.md>] [--update <page.md>]
+  upetrack compare [--data <dir>] [--frames N] [--json <out.json>] [--markdown <out.md>] [--update <page.md>] [--figures <dir>]
   upetrack synth <scenario> <dir> [--frames N] [--seed S] [--hd] [--variant V]
                  [--depth-noise X] [--jpeg-quality Q] [--y4m <video.y4m>]
   upetrack bench [<sequence>...] [--frames N] [--repeat R] [--algorithm A,B,..]

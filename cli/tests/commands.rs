@@ -1,0 +1,175 @@
+//! The command's own tools on synthetic sequences: `synth`'s encoding
+//! options and `score` on result files of any tracker.
+
+use std::path::PathBuf;
+
+use upetrack_io::{FolderSource, Sequence};
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("upetrack-cmd-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+/// Runs the command with `args` and returns its output.
+fn run(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_upetrack"))
+        .args(args)
+        .output()
+        .expect("run upetrack")
+}
+
+fn synth(scenario: &str, frames: usize, dir: &std::path::Path) {
+    let dir = dir.to_str().expect("utf-8");
+    let out = run(&[
+        "synth",
+        scenario,
+        dir,
+        "--frames",
+        &frames.to_string(),
+        "--seed",
+        "3",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// The bundled opening sample's options: `--depth-noise 0` removes the
+/// disparity noise (the flat table's depth spread collapses), `--jpeg-quality`
+/// makes smaller colour files, and values out of range are refused.
+#[test]
+fn synth_depth_noise_and_jpeg_quality_take_effect_and_are_checked() {
+    let write = |name: &str, extra: &[&str]| {
+        let dir = temp_dir(name);
+        let mut args = vec![
+            "synth",
+            "static-s",
+            dir.to_str().expect("utf-8"),
+            "--frames",
+            "1",
+        ];
+        args.extend_from_slice(extra);
+        let out = run(&args);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        dir
+    };
+    // Spread of the depth over the image's top-left corner (table only).
+    let spread = |dir: &PathBuf| {
+        let seq = Sequence::open(FolderSource::new(dir)).expect("opens");
+        let f = seq.frame(0).expect("decodes");
+        let w = f.width as usize;
+        let vals: Vec<f64> = (0..60)
+            .flat_map(|v| (0..80).map(move |u| v * w + u))
+            .map(|k| f.depth[k])
+            .filter(|&d| d > 0)
+            .map(f64::from)
+            .collect();
+        let mean = vals.iter().sum::<f64>() / vals.len() as f64;
+        (vals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / vals.len() as f64).sqrt()
+    };
+    let noisy = write("noise-default", &[]);
+    let quiet = write("noise-off", &["--depth-noise", "0", "--jpeg-quality", "60"]);
+    let (a, b) = (spread(&noisy), spread(&quiet));
+    assert!(
+        a > 0.7 && b < 0.3,
+        "depth spread {a} mm with noise, {b} mm without"
+    );
+    let size = |dir: &PathBuf| {
+        std::fs::metadata(dir.join("color/000000.jpg"))
+            .expect("jpg")
+            .len()
+    };
+    assert!(
+        size(&quiet) < size(&noisy) * 3 / 4,
+        "{} vs {} bytes",
+        size(&quiet),
+        size(&noisy)
+    );
+    for bad in [
+        ["--depth-noise", "NaN"],
+        ["--depth-noise", "-1"],
+        ["--jpeg-quality", "0"],
+        ["--jpeg-quality", "101"],
+    ] {
+        let dir = temp_dir("bad-synth-option");
+        let out = run(&[
+            "synth",
+            "static-s",
+            dir.to_str().expect("utf-8"),
+            "--frames",
+            "1",
+            bad[0],
+            bad[1],
+        ]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && err.contains(&bad[0][2..]),
+            "{bad:?}: {err}"
+        );
+    }
+}
+
+/// `upetrack score` tables a result file written by any tracker as `eval`
+/// tables the command's own run, and refuses one that does not fit the
+/// sequence (a frame missing, a node that is not a number).
+#[test]
+fn score_tables_a_result_file_as_eval_does_and_refuses_one_that_does_not_fit() {
+    let dir = temp_dir("score");
+    synth("dynamic-pull", 12, &dir);
+    let seq = dir.to_string_lossy().to_string();
+    let out = dir.join("result.json");
+    let o = run(&["track", &seq, "--out", &out.to_string_lossy()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let row = |text: &str| {
+        text.lines()
+            .find(|l| l.contains("| upetrack |"))
+            .map(|l| l.split('|').skip(3).take(13).collect::<Vec<_>>().join("|"))
+            .unwrap_or_default()
+    };
+    let eval = run(&["eval", &seq]);
+    let score = run(&["score", &seq, &out.to_string_lossy()]);
+    assert!(
+        score.status.success(),
+        "{}",
+        String::from_utf8_lossy(&score.stderr)
+    );
+    let (e, s) = (
+        String::from_utf8_lossy(&eval.stdout),
+        String::from_utf8_lossy(&score.stdout),
+    );
+    assert!(
+        !row(&e).is_empty() && row(&e) == row(&s),
+        "eval:\n{e}\nscore:\n{s}"
+    );
+    // Another tracker's file: `params` empty, a frame dropped, a NaN node.
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).expect("result")).expect("json");
+    v["params"] = serde_json::json!({});
+    v["algorithm"] = serde_json::json!("theirs");
+    let foreign = dir.join("theirs.json");
+    std::fs::write(&foreign, v.to_string()).expect("write");
+    let o = run(&["score", &seq, &foreign.to_string_lossy()]);
+    assert!(o.status.success() && String::from_utf8_lossy(&o.stdout).contains("| theirs |"));
+    let mut short = v.clone();
+    short["frames"].as_array_mut().expect("frames").pop();
+    std::fs::write(&foreign, short.to_string()).expect("write");
+    let o = run(&["score", &seq, &foreign.to_string_lossy()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("frames must be 0..12"),
+        "{err}"
+    );
+    let mut nan = v.clone();
+    nan["frames"][3]["nodes"][0][0] = serde_json::json!("NaN");
+    std::fs::write(&foreign, nan.to_string().replace("\"NaN\"", "1e999")).expect("write");
+    let o = run(&["score", &seq, &foreign.to_string_lossy()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("theirs.json"), "{err}");
+}
