@@ -321,15 +321,7 @@ fn cmd_eval(raw: &[String]) -> Result<(), CliError> {
             rows.push(summary);
         }
     }
-    let table = markdown_table(&rows);
-    println!("{table}");
-    if let Some(p) = args.value("json") {
-        upetrack_io::write::write_json(Path::new(p), &rows)?;
-    }
-    if let Some(p) = args.value("markdown") {
-        upetrack_io::write::write_file(Path::new(p), table.as_bytes())?;
-    }
-    Ok(())
+    print_table(&rows, &args)
 }
 
 /// `upetrack score <sequence> <result.json>...`: the eval table of result
@@ -370,7 +362,12 @@ fn cmd_score(raw: &[String]) -> Result<(), CliError> {
             seq.first_occluded_frame(),
         ));
     }
-    let table = markdown_table(&rows);
+    print_table(&rows, &args)
+}
+
+/// Prints the table of `rows`, and writes it where `--json` and `--markdown` say.
+fn print_table(rows: &[Summary], args: &Args) -> Result<(), CliError> {
+    let table = markdown_table(rows);
     println!("{table}");
     if let Some(p) = args.value("json") {
         upetrack_io::write::write_json(Path::new(p), &rows)?;

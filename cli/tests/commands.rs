@@ -5,36 +5,11 @@ use std::path::PathBuf;
 
 use upetrack_io::{FolderSource, Sequence};
 
+mod common;
+use common::{run, synth};
+
 fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("upetrack-cmd-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
-}
-
-/// Runs the command with `args` and returns its output.
-fn run(args: &[&str]) -> std::process::Output {
-    std::process::Command::new(env!("CARGO_BIN_EXE_upetrack"))
-        .args(args)
-        .output()
-        .expect("run upetrack")
-}
-
-fn synth(scenario: &str, frames: usize, dir: &std::path::Path) {
-    let dir = dir.to_str().expect("utf-8");
-    let out = run(&[
-        "synth",
-        scenario,
-        dir,
-        "--frames",
-        &frames.to_string(),
-        "--seed",
-        "3",
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::temp_dir("cmd", name)
 }
 
 /// The bundled opening sample's options: `--depth-noise 0` removes the

@@ -18,17 +18,11 @@ fn fixture(name: &str) -> PathBuf {
         .join(name)
 }
 
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("upetrack-rec-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
-}
+mod common;
+use common::run;
 
-fn run(args: &[&str]) -> std::process::Output {
-    std::process::Command::new(env!("CARGO_BIN_EXE_upetrack"))
-        .args(args)
-        .output()
-        .expect("run upetrack")
+fn temp_dir(name: &str) -> PathBuf {
+    common::temp_dir("rec", name)
 }
 
 fn track<S: Source>(seq: &Sequence<S>) -> TrackResult {

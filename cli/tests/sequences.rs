@@ -12,39 +12,11 @@ use upetrack_io::run::track_sequence;
 use upetrack_io::{FolderSource, Sequence};
 use upetrack_synth::{RenderSettings, Scenario, ScenarioKind, Variant};
 
+mod common;
+use common::{run, synth};
+
 fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("upetrack-test-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
-}
-
-fn upetrack() -> std::process::Command {
-    std::process::Command::new(env!("CARGO_BIN_EXE_upetrack"))
-}
-
-/// Runs the command with `args` and returns its output.
-fn run(args: &[&str]) -> std::process::Output {
-    upetrack().args(args).output().expect("run upetrack")
-}
-
-fn synth(scenario: &str, frames: usize, dir: &std::path::Path) {
-    let out = upetrack()
-        .args([
-            "synth",
-            scenario,
-            dir.to_str().expect("utf-8"),
-            "--frames",
-            &frames.to_string(),
-            "--seed",
-            "3",
-        ])
-        .output()
-        .expect("run upetrack synth");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::temp_dir("test", name)
 }
 
 #[test]
