@@ -302,9 +302,7 @@ fn cmd_eval(raw: &[String]) -> Result<(), CliError> {
     let mut rows = Vec::new();
     for path in &args.positional {
         let seq = open_sequence(path, &RecordingArgs::from(&args)?)?;
-        let name = Path::new(path)
-            .file_name()
-            .map_or(path.clone(), |n| n.to_string_lossy().into_owned());
+        let name = sequence_name(path);
         for &algorithm in &algorithms {
             let (summary, result) = evaluate(&seq, &name, with_algorithm(params, algorithm))?;
             if let Some(csv) = args.value("per-frame") {
@@ -329,29 +327,25 @@ fn cmd_eval(raw: &[String]) -> Result<(), CliError> {
 /// sequence's ground truth.
 fn cmd_score(raw: &[String]) -> Result<(), CliError> {
     let args = Args::parse(raw, &[], &with_recording_options(&["json", "markdown"]))?;
-    let [path, results @ ..] = args.positional.as_slice() else {
-        return Err(CliError(format!(
-            "score takes a sequence and result files\n\n{USAGE}"
-        )));
+    let (path, results) = match args.positional.as_slice() {
+        [path, results @ ..] if !results.is_empty() => (path, results),
+        _ => {
+            return Err(CliError(format!(
+                "score takes a sequence and result files\n\n{USAGE}"
+            )))
+        }
     };
-    if results.is_empty() {
-        return Err(CliError(format!(
-            "score takes a sequence and result files\n\n{USAGE}"
-        )));
-    }
     let seq = open_sequence(path, &RecordingArgs::from(&args)?)?;
-    let name = Path::new(path)
-        .file_name()
-        .map_or(path.clone(), |n| n.to_string_lossy().into_owned());
+    let name = sequence_name(path);
     let mut rows = Vec::new();
     for r in results {
         let result = upetrack_io::result::read_result(Path::new(r))?;
-        let frames: Vec<usize> = result.frames.iter().map(|f| f.frame).collect();
-        if frames != (0..seq.len()).collect::<Vec<_>>() {
+        let in_order = result.frames.iter().enumerate().all(|(i, f)| f.frame == i);
+        if result.frames.len() != seq.len() || !in_order {
             return Err(CliError(format!(
                 "{r}: frames must be 0..{} in order, one entry each, as the sequence has (found {})",
                 seq.len(),
-                frames.len()
+                result.frames.len()
             )));
         }
         rows.push(summarise(
@@ -363,6 +357,13 @@ fn cmd_score(raw: &[String]) -> Result<(), CliError> {
         ));
     }
     print_table(&rows, &args)
+}
+
+/// A sequence's name in tables: its folder's or file's name.
+fn sequence_name(path: &str) -> String {
+    Path::new(path)
+        .file_name()
+        .map_or(path.to_string(), |n| n.to_string_lossy().into_owned())
 }
 
 /// Prints the table of `rows`, and writes it where `--json` and `--markdown` say.

@@ -45,15 +45,9 @@ pub struct TrackResult {
 /// defaults). Every node must be finite.
 pub fn read_result(path: &std::path::Path) -> Result<TrackResult, crate::SequenceError> {
     let name = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|source| crate::SequenceError::Io {
-        path: name.clone(),
-        source,
-    })?;
+    let text = std::fs::read_to_string(path).map_err(|e| crate::write::io_err(path, e))?;
     let result: TrackResult =
-        serde_json::from_str(&text).map_err(|e| crate::SequenceError::Json {
-            path: name.clone(),
-            message: e.to_string(),
-        })?;
+        serde_json::from_str(&text).map_err(|e| crate::write::json_error(&name, e))?;
     for f in &result.frames {
         if f.nodes.iter().flatten().any(|c| !c.is_finite()) {
             return Err(crate::SequenceError::invalid(

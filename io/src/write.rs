@@ -7,7 +7,7 @@ use crate::error::SequenceError;
 /// JPEG quality of written colour frames.
 pub const JPEG_QUALITY: u8 = 92;
 
-fn io_err(path: &Path, source: std::io::Error) -> SequenceError {
+pub(crate) fn io_err(path: &Path, source: std::io::Error) -> SequenceError {
     SequenceError::Io {
         path: path.display().to_string(),
         source,
@@ -157,7 +157,7 @@ pub fn compact_json_bytes<T: serde::Serialize>(
     serde_json::to_vec(value).map_err(|e| json_error(path, e))
 }
 
-fn json_error(path: &str, e: serde_json::Error) -> SequenceError {
+pub(crate) fn json_error(path: &str, e: serde_json::Error) -> SequenceError {
     SequenceError::Json {
         path: path.to_string(),
         message: e.to_string(),
