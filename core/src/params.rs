@@ -125,6 +125,8 @@ impl Params {
                 conserve_length: false,
                 across_rope_displacement: false,
                 smooth_resampling: false,
+                rest_speed: 0.0,
+                anchor_across_only: false,
                 ..upe
             },
             ..Self::default()

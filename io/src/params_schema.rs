@@ -279,6 +279,21 @@ pub const PARAMETERS: &[ParamInfo] = &[
         ParamKind::Bool,
     ),
     p(
+        "anchor_across_only",
+        Upetrack,
+        "anchors across",
+        "A visible node beside a hidden run keeps only EM's move across the rope, not its pull away from the occlusion's edge",
+        ParamKind::Bool,
+    ),
+    p(
+        "rest_speed",
+        Upetrack,
+        "rest speed",
+        "Below this motion of its known neighbours (mm per frame) a hidden run rests: alpha rises to 1 (Eq. 11); 0 keeps alpha",
+        number(0.0, 20.0, 0.1),
+    )
+    .in_mm(),
+    p(
         "outlier_weight",
         Upetrack,
         "w",

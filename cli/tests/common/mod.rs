@@ -4,6 +4,8 @@
 
 use std::path::PathBuf;
 
+pub mod scenes;
+
 /// A fresh temporary folder for one test (`prefix` names the test file).
 pub fn temp_dir(prefix: &str, name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("upetrack-{prefix}-{}-{name}", std::process::id()));

@@ -25,6 +25,11 @@ use crate::math::Vec3;
 use crate::step::{Algorithm, StepInput, StepOutput, TrackingStep};
 use crate::validation::{below_one, check, unit, ParamsError};
 
+/// Default [`UpeTrackParams::rest_speed`]: 2 mm per frame (6 cm/s at the
+/// D435i's 30 frames/s), about twice the frame-to-frame jitter across the
+/// rope of a visible node of a resting rope (0.9 mm median on static-s).
+pub const DEFAULT_REST_SPEED: f64 = 0.002;
+
 /// UPETrack's parameters for the registration and the occlusion estimate
 /// (the visibility test and `M` are shared by every algorithm and sit in
 /// [`crate::params::Params`]).
@@ -68,6 +73,18 @@ pub struct UpeTrackParams {
     /// not cut a bend's corners every frame. Default true; false is the
     /// paper's polyline.
     pub smooth_resampling: bool,
+    /// Speed of a hidden node's known neighbours below which its run is
+    /// taken to rest, metres per frame: `alpha` of Eq. 11 rises linearly
+    /// from `displacement_weight` at this speed to 1 at rest
+    /// (`occlusion::resting_weight`). 0 is the paper's fixed `alpha`.
+    pub rest_speed: f64,
+    /// Keep only the across-rope part of EM's move of a visible node next
+    /// to a hidden run (an anchor of Eq. 6-11): at an occlusion's edge the
+    /// cloud lies on one side of the node only, and the GMM pulls it away
+    /// from the edge along the rope every frame (about a third of a node
+    /// spacing), which is no motion of the rope. Default true; false is the
+    /// paper's EM.
+    pub anchor_across_only: bool,
     /// Weight of the uniform outlier component (`w`, Eq. 3). Default 0.1.
     pub outlier_weight: f64,
     /// EM stops when no node moves more than this in an iteration, metres. Default 0.1 mm.
@@ -93,6 +110,8 @@ impl Default for UpeTrackParams {
             free_space: true,
             across_rope_displacement: true,
             smooth_resampling: true,
+            rest_speed: DEFAULT_REST_SPEED,
+            anchor_across_only: true,
             outlier_weight: 0.1,
             em_tolerance: 1e-4,
             em_max_iterations: 10,
@@ -126,6 +145,13 @@ impl UpeTrackParams {
             (1..=MAX_EM_ITERATIONS).contains(&it),
             "an integer in 1..=1000",
         )?;
+        let r = self.rest_speed;
+        check(
+            "rest_speed",
+            r,
+            (0.0..=1.0).contains(&r),
+            "in [0, 1] metres per frame",
+        )?;
         let s = self.min_variance;
         check(
             "min_variance",
@@ -145,6 +171,7 @@ impl UpeTrackParams {
             end_displacement_weight: self.end_displacement_weight,
             hidden_motion: self.hidden_motion,
             across_rope_displacement: self.across_rope_displacement,
+            rest_speed: self.rest_speed,
         }
     }
 
@@ -227,6 +254,9 @@ fn run_step(
             &settings.em(),
             &mut observe,
         );
+        if settings.anchor_across_only {
+            occlusion::hold_anchors_along_rope(&mut nodes, input.previous, input.visible);
+        }
         if let Some(t) = trace.as_deref_mut() {
             t.em = iterations;
             t.registered = nodes.clone();

@@ -33,6 +33,11 @@ pub struct UpeCoefficients {
     /// `D_k` of Eq. 6 without its component along the rope (this project's
     /// decision; false gives the paper's).
     pub across_rope_displacement: bool,
+    /// Speed of the known neighbours below which a hidden node counts as
+    /// resting, metres per frame (this project's decision; 0, the paper's
+    /// rule, turns it off): `alpha` rises from its value towards 1 as the
+    /// mean displacement of Eq. 6 falls from this speed to 0.
+    pub rest_speed: f64,
 }
 
 /// The displacement estimate `y'` of a hidden node (Eq. 11's first term).
@@ -101,9 +106,13 @@ fn estimate_node_with(
             d
         }
     };
-    let y_disp = displacement_estimate.unwrap_or_else(|| {
-        prev[m] + (disp(n1) + disp(n2) * g + disp(n3) * (g * g)) / (1.0 + g + g * g)
-    });
+    let mean_displacement = (disp(n1) + disp(n2) * g + disp(n3) * (g * g)) / (1.0 + g + g * g);
+    let y_disp = displacement_estimate.unwrap_or(prev[m] + mean_displacement);
+    let alpha = resting_weight(
+        c.displacement_weight,
+        math::norm(&mean_displacement),
+        c.rest_speed,
+    );
 
     let d = math::norm(&(prev[m] - prev[n1]));
     let dir = now[n1] - now[n2];
@@ -117,7 +126,20 @@ fn estimate_node_with(
     let bending = prev[m] - prev[n1] * 2.0 + prev[n2];
     let y_geom = straight + bending * c.curvature_retention;
 
-    y_disp * c.displacement_weight + y_geom * (1.0 - c.displacement_weight)
+    y_disp * alpha + y_geom * (1.0 - alpha)
+}
+
+/// `alpha` of Eq. 11 for a node whose known neighbours moved `speed`
+/// (metres per frame): `alpha` itself at `rest_speed` and above, rising
+/// linearly to 1 (the displacement term alone) as the neighbours come to
+/// rest. A rope that does not move keeps its shape; Eq. 8-10's pull
+/// towards a straighter continuation is what a moving rope does.
+pub fn resting_weight(alpha: f64, speed: f64, rest_speed: f64) -> f64 {
+    if rest_speed > 0.0 && speed.is_finite() && speed < rest_speed {
+        alpha + (1.0 - alpha) * (1.0 - speed / rest_speed)
+    } else {
+        alpha
+    }
 }
 
 /// `d` without its component along the rope at node `k` of `chain` (the
@@ -132,6 +154,25 @@ pub fn across_rope(d: Vec3, chain: &[Vec3], k: usize) -> Vec3 {
         d - t * d.dot(&t)
     } else {
         d
+    }
+}
+
+/// Keeps, for each visible node with a hidden neighbour (an anchor of the
+/// occlusion estimate), only the part of its move from `previous` that is
+/// across the rope ([`across_rope`]). The cloud ends at the occlusion's
+/// edge, so EM pulls such a node away from it along the rope; passed on
+/// through Eq. 6-7 or the slide, that pull moves the hidden run.
+pub fn hold_anchors_along_rope(nodes: &mut [Vec3], previous: &[Vec3], visible: &[bool]) {
+    let n = nodes.len();
+    if previous.len() != n || visible.len() != n {
+        return;
+    }
+    for k in 0..n {
+        let beside_hidden = (k > 0 && !visible[k - 1]) || (k + 1 < n && !visible[k + 1]);
+        if visible[k] && beside_hidden {
+            let moved = nodes[k] - previous[k];
+            nodes[k] = previous[k] + across_rope(moved, previous, k);
+        }
     }
 }
 
@@ -323,6 +364,7 @@ mod tests {
         end_displacement_weight: 0.75,
         hidden_motion: HiddenMotion::Paper,
         across_rope_displacement: false,
+        rest_speed: 0.0,
     };
 
     #[test]
@@ -372,6 +414,7 @@ mod tests {
             displacement_decay: 0.8,
             hidden_motion: HiddenMotion::Paper,
             across_rope_displacement: false,
+            rest_speed: 0.0,
         };
         let prev = vec![
             Vec3::new(-1.0, 0.0, 0.0),
@@ -714,6 +757,7 @@ mod tests {
                     HiddenMotion::Slide,
                 ][case % 3],
                 across_rope_displacement: case % 2 == 0,
+                rest_speed: [0.0, 1e-3, 1.0][case % 3],
             };
             estimate_hidden(&mut nodes, &known, &prev, &c);
             assert!(nodes.iter().all(math::is_finite), "case {case}");
@@ -739,6 +783,7 @@ mod tests {
         let c = |across| UpeCoefficients {
             displacement_weight: 1.0,
             across_rope_displacement: across,
+            rest_speed: 0.0,
             ..PAPER
         };
         let slide = Vec3::new(0.005, 0.0, 0.0);
@@ -768,5 +813,91 @@ mod tests {
                 moved[m]
             );
         }
+    }
+
+    #[test]
+    fn resting_weight_rises_from_alpha_to_one_as_the_neighbours_come_to_rest() {
+        assert_eq!(resting_weight(0.75, 0.0, 0.002), 1.0);
+        assert!((resting_weight(0.75, 0.001, 0.002) - 0.875).abs() < 1e-12);
+        assert_eq!(resting_weight(0.75, 0.002, 0.002), 0.75);
+        assert_eq!(resting_weight(0.75, 0.01, 0.002), 0.75);
+        // Off, and a speed that is not a number, give the paper's alpha.
+        assert_eq!(resting_weight(0.75, 0.0, 0.0), 0.75);
+        assert_eq!(resting_weight(0.75, f64::NAN, 0.002), 0.75);
+    }
+
+    /// A resting rope: the known nodes do not move, so the hidden node of a
+    /// bend keeps its place with a rest speed, and Eq. 8-10 (b, a < 1) pull
+    /// it in towards a straighter continuation without one.
+    #[test]
+    fn a_hidden_node_beside_resting_neighbours_keeps_its_place() {
+        let prev: Vec<Vec3> = (0..7)
+            .map(|i| {
+                let t = i as f64 * 0.3;
+                Vec3::new(libm::cos(t), libm::sin(t), 0.0) * 0.2
+            })
+            .collect();
+        // A lone hidden end node: one sweep, with `alpha` (not `alpha_end`).
+        let known = [true, true, true, true, true, true, false];
+        let resting = UpeCoefficients {
+            rest_speed: 0.002,
+            ..PAPER
+        };
+        let mut kept = prev.clone();
+        estimate_hidden(&mut kept, &known, &prev, &resting);
+        assert!(
+            (kept[6] - prev[6]).norm() < 1e-12,
+            "{:?}",
+            kept[6] - prev[6]
+        );
+        let mut pulled = prev.clone();
+        estimate_hidden(&mut pulled, &known, &prev, &PAPER);
+        assert!(
+            (pulled[6] - prev[6]).norm() > 1e-3,
+            "{:?}",
+            pulled[6] - prev[6]
+        );
+        // Moving faster than the rest speed: the paper's estimate exactly.
+        let moved: Vec<Vec3> = prev
+            .iter()
+            .map(|p| p + Vec3::new(0.0, 0.0, 0.005))
+            .collect();
+        let (mut a, mut b) = (moved.clone(), moved.clone());
+        estimate_hidden(&mut a, &known, &prev, &resting);
+        estimate_hidden(&mut b, &known, &prev, &PAPER);
+        assert_eq!(a, b);
+    }
+
+    /// EM pulls the visible node at an occlusion's edge away from it along
+    /// the rope; only that node's move across the rope is kept, and nodes
+    /// with no hidden neighbour keep EM's move whole.
+    #[test]
+    fn an_anchor_keeps_only_its_move_across_the_rope() {
+        let previous: Vec<Vec3> = (0..6)
+            .map(|i| Vec3::new(0.03 * i as f64, 0.0, 0.6))
+            .collect();
+        let visible = [false, false, true, true, true, true];
+        let moved = Vec3::new(0.01, 0.002, -0.001);
+        let mut nodes: Vec<Vec3> = previous.iter().map(|p| p + moved).collect();
+        hold_anchors_along_rope(&mut nodes, &previous, &visible);
+        let anchor = nodes[2] - previous[2];
+        assert!(
+            (anchor - Vec3::new(0.0, 0.002, -0.001)).norm() < 1e-12,
+            "{anchor:?}"
+        );
+        for k in [0, 1, 3, 4, 5] {
+            assert!((nodes[k] - previous[k] - moved).norm() < 1e-12, "node {k}");
+        }
+        // A visible node between two hidden runs is an anchor too.
+        let visible = [true, false, true, false, true, true];
+        let mut nodes: Vec<Vec3> = previous.iter().map(|p| p + moved).collect();
+        hold_anchors_along_rope(&mut nodes, &previous, &visible);
+        assert!((nodes[2] - previous[2]).x.abs() < 1e-12);
+        assert!((nodes[0] - previous[0]).x.abs() < 1e-12);
+        assert!((nodes[5] - previous[5] - moved).norm() < 1e-12);
+        // Mismatched lengths: nothing moves, nothing panics.
+        let mut short = nodes.clone();
+        hold_anchors_along_rope(&mut short, &previous[..3], &visible);
+        assert_eq!(short, nodes);
     }
 }

@@ -1,0 +1,64 @@
+//! Scenarios tracked in memory from the simulator, and the statistics the
+//! accuracy tests bound.
+
+use upetrack::{Frame, Params, Tracker};
+use upetrack_synth::{Scenario, ScenarioKind, Variant};
+
+/// Frame errors (mm) of a scenario tracked in memory from the simulator (no
+/// JPEG round trip), split into frames before and from the first occlusion.
+pub fn track_scenario(kind: ScenarioKind, frames: usize, params: Params) -> (Vec<f64>, Vec<f64>) {
+    track_scenario_in(kind, Variant::BASE, frames, params)
+}
+
+/// [`track_scenario`] in a scene variant; frames count as occluded from the
+/// first with a rectangle or with ground truth hidden by an occluder.
+pub fn track_scenario_in(
+    kind: ScenarioKind,
+    variant: Variant,
+    frames: usize,
+    params: Params,
+) -> (Vec<f64>, Vec<f64>) {
+    let mut s = Scenario::with_rope(kind, frames, 4, variant.render(), variant.rope());
+    let camera = s.camera();
+    let mut tracker = Tracker::new(params, s.camera(), s.hsv()).expect("tracker");
+    let occlusions = s.occlusions.clone();
+    let mut first_occluded = occlusions.first().map(|o| o.first);
+    let (mut clear, mut occluded) = (Vec::new(), Vec::new());
+    while let Some(f) = s.next_frame() {
+        if first_occluded.is_none() && f.occluded.iter().any(|&o| o) {
+            first_occluded = Some(f.index);
+        }
+        let frame =
+            Frame::new(camera.width, camera.height, &f.rgb, &f.depth, 0.001).expect("frame");
+        let rects = s.occlusions_at(f.index);
+        let out = tracker.process(&frame, &rects).expect("process");
+        assert!(
+            !out.is_lost(),
+            "{kind:?} frame {} lost: {:?}",
+            f.index,
+            out.status
+        );
+        let e = upetrack::metrics::frame_error(&out.nodes, &f.groundtruth).expect("error") * 1000.0;
+        if first_occluded.is_some_and(|o| f.index >= o) {
+            occluded.push(e);
+        } else {
+            clear.push(e);
+        }
+    }
+    (clear, occluded)
+}
+
+/// Mean of a series that must have frames and finite errors (an empty
+/// series or a NaN would otherwise pass any bound).
+pub fn mean(v: &[f64]) -> f64 {
+    assert!(!v.is_empty(), "no frames in the series");
+    assert!(v.iter().all(|e| e.is_finite()), "non-finite error in {v:?}");
+    v.iter().sum::<f64>() / v.len() as f64
+}
+
+/// Largest of a series, under the same conditions as [`mean`].
+pub fn max(v: &[f64]) -> f64 {
+    assert!(!v.is_empty(), "no frames in the series");
+    assert!(v.iter().all(|e| e.is_finite()), "non-finite error in {v:?}");
+    v.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+}
