@@ -74,9 +74,10 @@ pub struct UpeTrackParams {
     /// paper's polyline.
     pub smooth_resampling: bool,
     /// Speed of a hidden node's known neighbours below which its run is
-    /// taken to rest, metres per frame: `alpha` of Eq. 11 rises linearly
-    /// from `displacement_weight` at this speed to 1 at rest
-    /// (`occlusion::resting_weight`). 0 is the paper's fixed `alpha`.
+    /// taken to rest, metres per frame: below it `alpha` of Eq. 11 rises
+    /// from `displacement_weight` to 1 at rest, with the square of the
+    /// speed (`occlusion::resting_weight`). Default
+    /// [`DEFAULT_REST_SPEED`]; 0 is the paper's fixed `alpha`.
     pub rest_speed: f64,
     /// Keep only the across-rope part of EM's move of a visible node next
     /// to a hidden run (an anchor of Eq. 6-11): at an occlusion's edge the

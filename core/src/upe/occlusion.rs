@@ -130,13 +130,16 @@ fn estimate_node_with(
 }
 
 /// `alpha` of Eq. 11 for a node whose known neighbours moved `speed`
-/// (metres per frame): `alpha` itself at `rest_speed` and above, rising
-/// linearly to 1 (the displacement term alone) as the neighbours come to
-/// rest. A rope that does not move keeps its shape; Eq. 8-10's pull
-/// towards a straighter continuation is what a moving rope does.
+/// (metres per frame): `alpha` itself at `rest_speed` and above, and
+/// `alpha + (1 - alpha)(1 - (speed / rest_speed)^2)` below, which is 1 (the
+/// displacement term alone) at rest. The square keeps `alpha` near 1 over
+/// a resting rope's jitter. A rope that does not move keeps its shape;
+/// Eq. 8-10's pull towards a straighter continuation is what a moving rope
+/// does.
 pub fn resting_weight(alpha: f64, speed: f64, rest_speed: f64) -> f64 {
     if rest_speed > 0.0 && speed.is_finite() && speed < rest_speed {
-        alpha + (1.0 - alpha) * (1.0 - speed / rest_speed)
+        let r = speed / rest_speed;
+        alpha + (1.0 - alpha) * (1.0 - r * r)
     } else {
         alpha
     }
@@ -818,7 +821,8 @@ mod tests {
     #[test]
     fn resting_weight_rises_from_alpha_to_one_as_the_neighbours_come_to_rest() {
         assert_eq!(resting_weight(0.75, 0.0, 0.002), 1.0);
-        assert!((resting_weight(0.75, 0.001, 0.002) - 0.875).abs() < 1e-12);
+        // Half the rest speed: 0.75 + 0.25 * (1 - 1/4).
+        assert!((resting_weight(0.75, 0.001, 0.002) - 0.9375).abs() < 1e-12);
         assert_eq!(resting_weight(0.75, 0.002, 0.002), 0.75);
         assert_eq!(resting_weight(0.75, 0.01, 0.002), 0.75);
         // Off, and a speed that is not a number, give the paper's alpha.
