@@ -11,25 +11,19 @@ pub fn polyline_length(points: &[Vec3]) -> f64 {
     points.windows(2).map(|w| math::norm(&(w[1] - w[0]))).sum()
 }
 
-/// Resamples `points` into `count` nodes at spacing `l = L / (count - 1)`
-/// along the polyline (Eq. 14-15). The first node is kept exactly and the
-/// last lands on the last point. A polyline of zero length (or one point)
-/// gives `count` copies of its first point; an empty one gives nothing.
-pub fn resample_uniform(points: &[Vec3], count: usize) -> Vec<Vec3> {
-    let mut out = Vec::with_capacity(count);
-    let Some(&first) = points.first() else {
-        return out;
-    };
+/// Where each of `count` nodes at spacing `l = L / (count - 1)` falls on the
+/// polyline `points` (Eq. 14-15): the index of its segment and how far along
+/// it, in `[0, 1]`. The first node is at `(0, 0)` and the last at the end of
+/// the last segment. `None` when the nodes cannot be spread: fewer than two
+/// points, `count` below 2, or a length that is zero or not finite.
+fn arc_positions(points: &[Vec3], count: usize) -> Option<Vec<(usize, f64)>> {
     let length = polyline_length(points);
-    if count == 0 {
-        return out;
-    }
-    if count == 1 || !(length > math::LENGTH_EPSILON) || !length.is_finite() {
-        out.resize(count, first);
-        return out;
+    if points.len() < 2 || count < 2 || !(length > math::LENGTH_EPSILON) || !length.is_finite() {
+        return None;
     }
     let spacing = length / (count - 1) as f64;
-    out.push(first);
+    let mut out = Vec::with_capacity(count);
+    out.push((0, 0.0));
     // `q` is the segment index, `walked` the geodesic distance to its start.
     let mut q = 0;
     let mut walked = 0.0;
@@ -46,12 +40,32 @@ pub fn resample_uniform(points: &[Vec3], count: usize) -> Vec<Vec3> {
         } else {
             0.0
         };
-        out.push(points[q] + (points[q + 1] - points[q]) * t);
+        out.push((q, t));
     }
-    if let Some(&last) = points.last() {
-        out.push(last);
+    out.push((points.len() - 2, 1.0));
+    Some(out)
+}
+
+/// Resamples `points` into `count` nodes at spacing `l = L / (count - 1)`
+/// along the polyline (Eq. 14-15). The first node is kept exactly and the
+/// last lands on the last point. A polyline of zero length (or one point)
+/// gives `count` copies of its first point; an empty one gives nothing.
+pub fn resample_uniform(points: &[Vec3], count: usize) -> Vec<Vec3> {
+    let Some(&first) = points.first() else {
+        return Vec::new();
+    };
+    match arc_positions(points, count) {
+        Some(at) => at
+            .iter()
+            .enumerate()
+            .map(|(n, &(q, t))| match n {
+                0 => first,
+                _ if n + 1 == count => points[points.len() - 1],
+                _ => points[q] + (points[q + 1] - points[q]) * t,
+            })
+            .collect(),
+        None => alloc::vec![first; count],
     }
-    out
 }
 
 /// Pieces each node-to-node segment of the smooth curve is cut into before
@@ -89,30 +103,57 @@ pub fn resample_smooth(points: &[Vec3], count: usize) -> Vec<Vec3> {
     let lerp = |p: Vec3, q: Vec3, ta: f64, tb: f64, t: f64| {
         p * ((tb - t) / (tb - ta)) + q * ((t - ta) / (tb - ta))
     };
-    let mut dense = Vec::with_capacity((n - 1) * SMOOTH_PIECES + 1);
-    for i in 0..n - 1 {
+    // The curve between points `i` and `i + 1` at `u` in [0, 1].
+    let curve = |i: usize, u: f64| -> Vec3 {
         let i = i as isize;
         let (p0, p1, p2, p3) = (at(i - 1), at(i), at(i + 1), at(i + 2));
         let t1 = knot(&p0, &p1);
         let t2 = t1 + knot(&p1, &p2);
         let t3 = t2 + knot(&p2, &p3);
+        let t = t1 + (t2 - t1) * u;
+        // Barry-Goldman's pyramid for the curve between p1 and p2.
+        let (a1, a2, a3) = (
+            lerp(p0, p1, 0.0, t1, t),
+            lerp(p1, p2, t1, t2, t),
+            lerp(p2, p3, t2, t3, t),
+        );
+        let (b1, b2) = (lerp(a1, a2, 0.0, t2, t), lerp(a2, a3, t1, t3, t));
+        lerp(b1, b2, t1, t2, t)
+    };
+    let mut dense = Vec::with_capacity((n - 1) * SMOOTH_PIECES + 1);
+    for i in 0..n - 1 {
         for k in 0..SMOOTH_PIECES {
-            let t = t1 + (t2 - t1) * k as f64 / SMOOTH_PIECES as f64;
-            // Barry-Goldman's pyramid for the curve between p1 and p2.
-            let (a1, a2, a3) = (
-                lerp(p0, p1, 0.0, t1, t),
-                lerp(p1, p2, t1, t2, t),
-                lerp(p2, p3, t2, t3, t),
-            );
-            let (b1, b2) = (lerp(a1, a2, 0.0, t2, t), lerp(a2, a3, t1, t3, t));
-            dense.push(lerp(b1, b2, t1, t2, t));
+            dense.push(curve(i, k as f64 / SMOOTH_PIECES as f64));
         }
     }
     dense.push(points[n - 1]);
     if !dense.iter().all(math::is_finite) {
         return resample_uniform(points, count);
     }
-    resample_uniform(&dense, count)
+    // The arc lengths are measured on the pieces' chords, but each node is
+    // put on the curve itself: on a chord it would sit inside a bend by the
+    // chord's sagitta, and repeated every frame that straightens a bend
+    // nothing observes (a hidden one).
+    match arc_positions(&dense, count) {
+        Some(at) => at
+            .iter()
+            .enumerate()
+            .map(|(k, &(q, t))| match k {
+                0 => points[0],
+                _ if k + 1 == count => points[n - 1],
+                _ => {
+                    let (i, piece) = (q / SMOOTH_PIECES, q % SMOOTH_PIECES);
+                    let y = curve(i, (piece as f64 + t) / SMOOTH_PIECES as f64);
+                    if math::is_finite(&y) {
+                        y
+                    } else {
+                        dense[q] + (dense[q + 1] - dense[q]) * t
+                    }
+                }
+            })
+            .collect(),
+        None => resample_uniform(points, count),
+    }
 }
 
 #[cfg(test)]
@@ -194,6 +235,25 @@ mod tests {
         for (a, b) in resample_smooth(&line, 6).iter().zip(&line) {
             assert!((a - b).norm() < 1e-12, "{a:?} vs {b:?}");
         }
+    }
+
+    /// One resampling of nodes on a bend, the first moved a little along
+    /// it (as EM moves a visible node): the nodes must land on the curve,
+    /// not on the chords of its pieces, which lie inside a bend by up to
+    /// their sagitta (9.5 um here). Repeated every frame that shrank a
+    /// hidden bend: 0.01 px a frame on static-s.
+    #[test]
+    fn smooth_resampling_puts_nodes_on_the_curve_not_on_its_chords() {
+        let radius = 0.05;
+        let on_circle = |a: f64| Vec3::new(radius * libm::cos(a), radius * libm::sin(a), 0.6);
+        let mut nodes: Vec<Vec3> = (0..12).map(|k| on_circle(0.3 * k as f64)).collect();
+        nodes[0] = on_circle(0.03);
+        let out = resample_smooth(&nodes, 12);
+        let inside = out[2..10]
+            .iter()
+            .map(|p| radius - libm::hypot(p.x, p.y))
+            .fold(0.0, f64::max);
+        assert!(inside < 2e-6, "nodes {inside} m inside the circle");
     }
 
     #[test]
