@@ -11,19 +11,19 @@ pub fn polyline_length(points: &[Vec3]) -> f64 {
     points.windows(2).map(|w| math::norm(&(w[1] - w[0]))).sum()
 }
 
-/// Where each of `count` nodes at spacing `l = L / (count - 1)` falls on the
-/// polyline `points` (Eq. 14-15): the index of its segment and how far along
-/// it, in `[0, 1]`. The first node is at `(0, 0)` and the last at the end of
-/// the last segment. `None` when the nodes cannot be spread: fewer than two
-/// points, `count` below 2, or a length that is zero or not finite.
-fn arc_positions(points: &[Vec3], count: usize) -> Option<Vec<(usize, f64)>> {
+/// `count` nodes at spacing `l = L / (count - 1)` along the polyline
+/// `points` (Eq. 14-15): the first and last points kept exactly, each node
+/// between them `place(q, t)` for its segment `q` and how far along it, in
+/// `[0, 1]`. `None` when the nodes cannot be spread: fewer than two points,
+/// `count` below 2, or a length that is zero or not finite.
+fn spread(points: &[Vec3], count: usize, place: impl Fn(usize, f64) -> Vec3) -> Option<Vec<Vec3>> {
     let length = polyline_length(points);
     if points.len() < 2 || count < 2 || !(length > math::LENGTH_EPSILON) || !length.is_finite() {
         return None;
     }
     let spacing = length / (count - 1) as f64;
     let mut out = Vec::with_capacity(count);
-    out.push((0, 0.0));
+    out.push(points[0]);
     // `q` is the segment index, `walked` the geodesic distance to its start.
     let mut q = 0;
     let mut walked = 0.0;
@@ -40,9 +40,9 @@ fn arc_positions(points: &[Vec3], count: usize) -> Option<Vec<(usize, f64)>> {
         } else {
             0.0
         };
-        out.push((q, t));
+        out.push(place(q, t));
     }
-    out.push((points.len() - 2, 1.0));
+    out.push(points[points.len() - 1]);
     Some(out)
 }
 
@@ -54,18 +54,10 @@ pub fn resample_uniform(points: &[Vec3], count: usize) -> Vec<Vec3> {
     let Some(&first) = points.first() else {
         return Vec::new();
     };
-    match arc_positions(points, count) {
-        Some(at) => at
-            .iter()
-            .enumerate()
-            .map(|(n, &(q, t))| match n {
-                0 => first,
-                _ if n + 1 == count => points[points.len() - 1],
-                _ => points[q] + (points[q + 1] - points[q]) * t,
-            })
-            .collect(),
-        None => alloc::vec![first; count],
-    }
+    spread(points, count, |q, t| {
+        points[q] + (points[q + 1] - points[q]) * t
+    })
+    .unwrap_or_else(|| alloc::vec![first; count])
 }
 
 /// Pieces each node-to-node segment of the smooth curve is cut into before
@@ -134,26 +126,18 @@ pub fn resample_smooth(points: &[Vec3], count: usize) -> Vec<Vec3> {
     // put on the curve itself: on a chord it would sit inside a bend by the
     // chord's sagitta, and repeated every frame that straightens a bend
     // nothing observes (a hidden one).
-    match arc_positions(&dense, count) {
-        Some(at) => at
-            .iter()
-            .enumerate()
-            .map(|(k, &(q, t))| match k {
-                0 => points[0],
-                _ if k + 1 == count => points[n - 1],
-                _ => {
-                    let (i, piece) = (q / SMOOTH_PIECES, q % SMOOTH_PIECES);
-                    let y = curve(i, (piece as f64 + t) / SMOOTH_PIECES as f64);
-                    if math::is_finite(&y) {
-                        y
-                    } else {
-                        dense[q] + (dense[q + 1] - dense[q]) * t
-                    }
-                }
-            })
-            .collect(),
-        None => resample_uniform(points, count),
-    }
+    spread(&dense, count, |q, t| {
+        let y = curve(
+            q / SMOOTH_PIECES,
+            ((q % SMOOTH_PIECES) as f64 + t) / SMOOTH_PIECES as f64,
+        );
+        if math::is_finite(&y) {
+            y
+        } else {
+            dense[q] + (dense[q + 1] - dense[q]) * t
+        }
+    })
+    .unwrap_or_else(|| resample_uniform(points, count))
 }
 
 #[cfg(test)]
