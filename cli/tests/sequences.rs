@@ -559,8 +559,12 @@ fn a_gripper_hiding_the_held_end_does_not_drag_it_off_along_its_arm() {
     // The rules before the fix: hidden ends carried by Eq. 6-7 alone (with
     // the paper's D_k, which hands EM's slide along the arm to the hidden
     // end), no length cap, no free-space check, polyline resampling, EM's
-    // whole move of the anchors, a fixed alpha.
-    let mut before = Params::default();
+    // whole move of the anchors, a fixed alpha, and the voxel grid's cloud
+    // the issue was reported with.
+    let mut before = Params {
+        downsampling: upetrack::perception::point_cloud::Downsampling::VoxelGrid,
+        ..Params::default()
+    };
     before.upetrack.hidden_motion = upetrack::upe::occlusion::HiddenMotion::Paper;
     before.upetrack.conserve_length = false;
     before.upetrack.free_space = false;

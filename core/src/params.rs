@@ -12,7 +12,7 @@ use crate::baselines::cdcpd2::Cdcpd2Settings;
 use crate::baselines::cpd::CpdSettings;
 use crate::baselines::trackdlo::TrackDloParams;
 use crate::perception::initialisation::InitSettings;
-use crate::perception::point_cloud::{CloudSettings, SURFACE_TO_AXIS_RATIO};
+use crate::perception::point_cloud::{CloudSettings, Downsampling, SURFACE_TO_AXIS_RATIO};
 use crate::step::Algorithm;
 pub use crate::upe::registration::MAX_EM_ITERATIONS;
 use crate::upe::UpeTrackParams;
@@ -42,6 +42,10 @@ pub struct Params {
     pub visibility_min_fraction: f64,
     /// Voxel-grid leaf size for downsampling the cloud, metres (0 keeps all points). Default 8 mm.
     pub voxel_size: f64,
+    /// How the cloud is downsampled at that leaf size. Default ray columns
+    /// (the mean depth of the pixels each point stands for); the voxel grid
+    /// is upstream TrackDLO's.
+    pub downsampling: Downsampling,
     /// Radius of the rope, metres: the cloud (its visible surface) is moved
     /// `pi/4` of it away from the camera to lie on the centre line. 0 turns
     /// the correction off. Default 7.5 mm (the paper's 15 mm thick rope);
@@ -91,6 +95,7 @@ impl Default for Params {
             visibility_min_points: 3,
             visibility_min_fraction: 0.5,
             voxel_size: 0.008,
+            downsampling: Downsampling::RayColumns,
             dlo_radius: 0.0075,
             estimate_radius: true,
             min_depth: 0.1,
@@ -135,12 +140,13 @@ impl Params {
 
     /// TrackDLO with upstream's own pipeline settings
     /// (`--params trackdlo-upstream`): its evaluation parameters, its 5 mm
-    /// voxel leaf, and the cloud left on the rope's surface (no push to the
+    /// voxel grid, and the cloud left on the rope's surface (no push to the
     /// axis, no radius estimate), as `trackdlo_node.cpp` builds it.
     pub fn trackdlo_upstream() -> Self {
         Self {
             algorithm: Algorithm::Trackdlo,
             voxel_size: 0.005,
+            downsampling: Downsampling::VoxelGrid,
             dlo_radius: 0.0,
             estimate_radius: false,
             trackdlo: TrackDloParams::EVALUATION,
@@ -241,6 +247,7 @@ impl Params {
             max_depth: self.max_depth,
             voxel_size: self.voxel_size,
             axis_offset: radius * SURFACE_TO_AXIS_RATIO,
+            downsampling: self.downsampling,
         }
     }
 
@@ -306,8 +313,8 @@ mod tests {
         assert_eq!(Params::preset("papers"), None);
         let t = Params::preset("trackdlo-upstream").expect("preset");
         assert_eq!(
-            (t.algorithm, t.voxel_size, t.dlo_radius),
-            (Algorithm::Trackdlo, 0.005, 0.0)
+            (t.algorithm, t.voxel_size, t.downsampling, t.dlo_radius),
+            (Algorithm::Trackdlo, 0.005, Downsampling::VoxelGrid, 0.0)
         );
         assert_eq!(t.trackdlo, TrackDloParams::EVALUATION);
         // Said in the preset itself, not only implied by the zero radius.

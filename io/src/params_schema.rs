@@ -150,10 +150,19 @@ pub const PARAMETERS: &[ParamInfo] = &[
         "voxel_size",
         Shared,
         "leaf",
-        "Voxel-grid leaf of the cloud's downsampling (0 keeps every point)",
+        "Leaf of the cloud's downsampling (0 keeps every point)",
         number(0.0, 100.0, 0.5),
     )
     .in_mm(),
+    p(
+        "downsampling",
+        Shared,
+        "cells",
+        "Columns along the viewing rays (each point the pixels' mean depth) or a voxel grid",
+        ParamKind::Choice {
+            choices: &["ray_columns", "voxel_grid"],
+        },
+    ),
     p(
         "dlo_radius",
         Shared,

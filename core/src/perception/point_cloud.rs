@@ -1,5 +1,6 @@
 //! The point cloud of one frame: masked pixels with valid depth, deprojected,
-//! downsampled on a voxel grid, and moved from the rope's surface to its axis.
+//! downsampled (in columns along the viewing rays, or on a voxel grid), and
+//! moved from the rope's surface to its axis.
 
 use alloc::vec;
 use alloc::vec::Vec;
@@ -31,6 +32,8 @@ pub struct CloudSettings {
     pub voxel_size: f64,
     /// Distance each point is pushed away from the camera along its ray, metres.
     pub axis_offset: f64,
+    /// How the cloud is downsampled.
+    pub downsampling: Downsampling,
 }
 
 /// Depth in metres of pixel `i`, or `None` if it has no valid measurement.
@@ -86,19 +89,80 @@ fn floor_to_i64(x: f64) -> i64 {
     }
 }
 
-/// One voxel's accumulator in [`voxel_downsample`]'s table.
-#[derive(Clone, Copy)]
-struct VoxelSlot {
-    key: u64,
-    sum: Vec3,
-    count: u32,
+/// Slot key of an empty slot (no cell key reaches it: keys use 63 bits).
+const EMPTY_CELL: u64 = u64::MAX;
+
+/// Smallest cell table; it doubles whenever it is half full.
+const MIN_CELL_SLOTS: usize = 64;
+
+/// Cells (voxels, ray columns) met in a cloud, each given a dense index in
+/// the order first met: an open-addressing table, at most half full, that
+/// starts small and doubles (a rope's cloud has far fewer cells than points).
+struct CellIndex {
+    /// `(key, dense index)`, or `(EMPTY_CELL, _)`.
+    slots: Vec<(u64, u32)>,
+    /// Every key met, by dense index.
+    keys: Vec<u64>,
 }
 
-/// Slot key of an empty slot (no voxel key reaches it: keys use 63 bits).
-const EMPTY_VOXEL: u64 = u64::MAX;
+impl CellIndex {
+    fn new() -> Self {
+        Self {
+            slots: vec![(EMPTY_CELL, 0); MIN_CELL_SLOTS],
+            keys: Vec::new(),
+        }
+    }
 
-/// Smallest voxel table; it doubles whenever it is half full.
-const MIN_VOXEL_SLOTS: usize = 64;
+    /// The dense index of `key`, given the next one if it is new.
+    fn index_of(&mut self, key: u64) -> usize {
+        if 2 * (self.keys.len() + 1) > self.slots.len() {
+            let mut grown = vec![(EMPTY_CELL, 0); 2 * self.slots.len()];
+            for &(k, i) in self.slots.iter().filter(|s| s.0 != EMPTY_CELL) {
+                let at = cell_slot(&grown, k);
+                grown[at] = (k, i);
+            }
+            self.slots = grown;
+        }
+        let at = cell_slot(&self.slots, key);
+        if self.slots[at].0 == EMPTY_CELL {
+            self.slots[at] = (key, self.keys.len() as u32);
+            self.keys.push(key);
+        }
+        self.slots[at].1 as usize
+    }
+
+    /// Dense indices ordered by key, so that what is built from them does
+    /// not depend on the order the points came in.
+    fn by_key(&self) -> Vec<usize> {
+        let mut order: Vec<usize> = (0..self.keys.len()).collect();
+        order.sort_unstable_by_key(|&i| self.keys[i]);
+        order
+    }
+}
+
+/// The slot holding `key`, or the empty one where it goes (the table has a
+/// power-of-two length and at least one empty slot).
+fn cell_slot(slots: &[(u64, u32)], key: u64) -> usize {
+    let mask = slots.len() - 1;
+    let shift = 64 - slots.len().trailing_zeros();
+    let mut slot = (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> shift) as usize;
+    while slots[slot].0 != EMPTY_CELL && slots[slot].0 != key {
+        slot = (slot + 1) & mask;
+    }
+    slot
+}
+
+/// The key of the cell with integer coordinates `idx`, or `None` beyond
+/// [`MAX_VOXEL_INDEX`].
+fn cell_key(idx: [i64; 3]) -> Option<u64> {
+    if idx.iter().any(|k| k.abs() >= MAX_VOXEL_INDEX) {
+        return None;
+    }
+    Some(
+        idx.iter()
+            .fold(0u64, |acc, &k| (acc << 21) | (k + MAX_VOXEL_INDEX) as u64),
+    )
+}
 
 /// Voxel-grid downsampling: one point, the centroid, per occupied cube of
 /// side `leaf`. The output is ordered by voxel index, so it does not depend
@@ -107,79 +171,142 @@ pub fn voxel_downsample(points: &[Vec3], leaf: f64) -> Vec<Vec3> {
     if !(leaf > 0.0 && leaf.is_finite()) {
         return points.iter().copied().filter(math::is_finite).collect();
     }
-    // Open addressing, at most half full: a rope's cloud has far fewer
-    // voxels than points, so the table starts small and doubles.
-    let mut slots = vec![
-        VoxelSlot {
-            key: EMPTY_VOXEL,
-            sum: Vec3::zeros(),
-            count: 0,
-        };
-        MIN_VOXEL_SLOTS
-    ];
-    let mut used = 0;
+    let mut cells = CellIndex::new();
+    let mut sums: Vec<(Vec3, u32)> = Vec::new();
     let inv = 1.0 / leaf;
-    for p in points {
-        if !math::is_finite(p) {
+    for p in points.iter().filter(|p| math::is_finite(p)) {
+        let Some(key) = cell_key([p.x, p.y, p.z].map(|c| floor_to_i64(c * inv))) else {
             continue;
+        };
+        let i = cells.index_of(key);
+        if i == sums.len() {
+            sums.push((Vec3::zeros(), 0));
         }
-        let idx = [p.x, p.y, p.z].map(|c| floor_to_i64(c * inv));
-        if idx.iter().any(|k| k.abs() >= MAX_VOXEL_INDEX) {
-            continue;
-        }
-        let key = idx
-            .iter()
-            .fold(0u64, |acc, &k| (acc << 21) | (k + MAX_VOXEL_INDEX) as u64);
-        if 2 * (used + 1) > slots.len() {
-            slots = grown(&slots);
-        }
-        let at = voxel_slot(&slots, key);
-        let slot = &mut slots[at];
-        if slot.key == EMPTY_VOXEL {
-            slot.key = key;
-            used += 1;
-        }
-        slot.sum += p;
-        slot.count += 1;
+        sums[i].0 += p;
+        sums[i].1 += 1;
     }
-    let mut occupied: Vec<(u64, usize)> = slots
-        .iter()
-        .enumerate()
-        .filter(|(_, s)| s.key != EMPTY_VOXEL)
-        .map(|(i, s)| (s.key, i))
-        .collect();
-    occupied.sort_unstable();
-    occupied
+    cells
+        .by_key()
         .into_iter()
-        .map(|(_, i)| slots[i].sum / slots[i].count as f64)
+        .map(|i| sums[i].0 / sums[i].1 as f64)
         .collect()
 }
 
-/// The slot holding `key`, or the empty one where it goes (the table has a
-/// power-of-two length and at least one empty slot).
-fn voxel_slot(slots: &[VoxelSlot], key: u64) -> usize {
-    let mask = slots.len() - 1;
-    let shift = 64 - slots.len().trailing_zeros();
-    let mut slot = (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> shift) as usize;
-    while slots[slot].key != EMPTY_VOXEL && slots[slot].key != key {
-        slot = (slot + 1) & mask;
-    }
-    slot
+/// Width of a ray column as a fraction of the voxel leaf, at the cloud's
+/// mean depth. Chosen on the tuning subset (`docs/algorithm-notes.md`).
+pub const COLUMN_WIDTH_RATIO: f64 = 0.5;
+
+/// A ray column's points, sorted by depth, are split where the depth jumps
+/// by more than this fraction of the leaf: a rope's surface is sampled
+/// densely in depth, and what lies behind it (the table seen through an
+/// aligned depth image's edge pixels) is not.
+pub const COLUMN_GAP_RATIO: f64 = 0.5;
+
+/// Deepest span of one ray column's cluster, as a multiple of the leaf: a
+/// rope seen end-on still gives one point per few leaves.
+pub const COLUMN_SPAN_RATIO: f64 = 3.0;
+
+/// The cloud's downsampling.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
+pub enum Downsampling {
+    /// Cubes of the voxel leaf (PCL's voxel grid, as the paper and
+    /// TrackDLO use it). Cubes cut by the silhouette hold only the rope's
+    /// far side and count as much as full ones: the cloud lies deeper than
+    /// the rope's surface does on average (about 2 mm at 8 mm leaves).
+    VoxelGrid,
+    /// Columns along the viewing rays, [`COLUMN_WIDTH_RATIO`] of a leaf
+    /// wide, each split along its depth at gaps ([`ray_column_downsample`]):
+    /// every point is the mean depth of the pixels it stands for.
+    #[default]
+    RayColumns,
 }
 
-/// The table at twice the size, with every voxel moved over unchanged.
-fn grown(slots: &[VoxelSlot]) -> Vec<VoxelSlot> {
-    let empty = VoxelSlot {
-        key: EMPTY_VOXEL,
-        sum: Vec3::zeros(),
-        count: 0,
-    };
-    let mut out = vec![empty; 2 * slots.len()];
-    for s in slots.iter().filter(|s| s.key != EMPTY_VOXEL) {
-        let slot = voxel_slot(&out, s.key);
-        out[slot] = *s;
+/// Ray-column downsampling: the points are binned by viewing direction in
+/// square columns `COLUMN_WIDTH_RATIO * leaf` wide at the cloud's mean
+/// depth; a column's points, in depth order, are split where the depth jumps
+/// by more than `COLUMN_GAP_RATIO * leaf` or the cluster would span more
+/// than `COLUMN_SPAN_RATIO * leaf`; each cluster gives its centroid. Ordered
+/// by column and depth, so independent of the input order. Non-finite points
+/// and points not in front of the camera are dropped.
+pub fn ray_column_downsample(points: &[Vec3], leaf: f64) -> Vec<Vec3> {
+    let usable = |p: &Vec3| math::is_finite(p) && p.z > 0.0;
+    if !(leaf > 0.0 && leaf.is_finite()) {
+        return points.iter().copied().filter(usable).collect();
+    }
+    let (mut depth_sum, mut n) = (0.0, 0usize);
+    for p in points.iter().filter(|p| usable(p)) {
+        depth_sum += p.z;
+        n += 1;
+    }
+    if n == 0 {
+        return Vec::new();
+    }
+    let inv = depth_sum / (n as f64 * COLUMN_WIDTH_RATIO * leaf);
+    const NO_COLUMN: u32 = u32::MAX;
+    let mut cells = CellIndex::new();
+    let mut column_of: Vec<u32> = Vec::with_capacity(points.len());
+    let mut counts: Vec<u32> = Vec::new();
+    for p in points {
+        let mut column = NO_COLUMN;
+        if usable(p) {
+            let scale = inv / p.z;
+            let idx = [floor_to_i64(p.x * scale), floor_to_i64(p.y * scale), 0];
+            if let Some(key) = cell_key(idx) {
+                let c = cells.index_of(key);
+                if c == counts.len() {
+                    counts.push(0);
+                }
+                counts[c] += 1;
+                column = c as u32;
+            }
+        }
+        column_of.push(column);
+    }
+    // Counting sort of the points by column.
+    let mut start = Vec::with_capacity(counts.len() + 1);
+    let mut total = 0usize;
+    start.push(0);
+    for &k in &counts {
+        total += k as usize;
+        start.push(total);
+    }
+    let mut next = start.clone();
+    let mut grouped = vec![Vec3::zeros(); total];
+    for (p, &c) in points.iter().zip(&column_of) {
+        if c != NO_COLUMN {
+            grouped[next[c as usize]] = *p;
+            next[c as usize] += 1;
+        }
+    }
+    let (gap, span) = (COLUMN_GAP_RATIO * leaf, COLUMN_SPAN_RATIO * leaf);
+    let mut out = Vec::new();
+    for c in cells.by_key() {
+        let column = &mut grouped[start[c]..start[c + 1]];
+        column.sort_unstable_by(|a, b| a.z.total_cmp(&b.z));
+        let mut first = 0;
+        for k in 1..=column.len() {
+            let split = k == column.len()
+                || column[k].z - column[k - 1].z > gap
+                || column[k].z - column[first].z > span;
+            if split {
+                let cluster = &column[first..k];
+                let sum = cluster.iter().fold(Vec3::zeros(), |s, p| s + p);
+                out.push(sum / cluster.len() as f64);
+                first = k;
+            }
+        }
     }
     out
+}
+
+/// The cloud's points downsampled as `settings` says.
+pub fn downsample(points: &[Vec3], settings: &CloudSettings) -> Vec<Vec3> {
+    match settings.downsampling {
+        Downsampling::VoxelGrid => voxel_downsample(points, settings.voxel_size),
+        Downsampling::RayColumns => ray_column_downsample(points, settings.voxel_size),
+    }
 }
 
 /// Moves each point `offset` metres farther along its viewing ray. A camera
@@ -214,7 +341,7 @@ pub fn build_cloud(
     settings: &CloudSettings,
 ) -> Vec<Vec3> {
     let raw = deproject_mask(frame, mask, camera, settings);
-    let mut cloud = voxel_downsample(&raw, settings.voxel_size);
+    let mut cloud = downsample(&raw, settings);
     push_along_rays(&mut cloud, settings.axis_offset);
     cap_points(cloud, MAX_CLOUD_POINTS)
 }
@@ -285,6 +412,96 @@ mod tests {
         }
     }
 
+    /// The visible surface of a 15 mm rope lying along x, its axis through
+    /// `(0, y_axis, z_axis)`, seen by a 615 px camera: one point per pixel.
+    fn rope_surface_pixels(y_axis: f64, z_axis: f64) -> Vec<Vec3> {
+        let (f, r) = (615.0, 0.0075);
+        let mut pts = Vec::new();
+        for u in -100..100 {
+            for v in -20..20 {
+                // The pixel's ray (u/f, v/f, 1) against the cylinder
+                // (y - y_axis)^2 + (z - z_axis)^2 = r^2, nearest hit.
+                let (a, b) = (u as f64 / f, (v as f64 + 0.5) / f);
+                let qa = b * b + 1.0;
+                let qb = -2.0 * (b * y_axis + z_axis);
+                let qc = y_axis * y_axis + z_axis * z_axis - r * r;
+                let disc = qb * qb - 4.0 * qa * qc;
+                if disc >= 0.0 {
+                    let t = (-qb - libm::sqrt(disc)) / (2.0 * qa);
+                    pts.push(Vec3::new(a * t, b * t, t));
+                }
+            }
+        }
+        pts
+    }
+
+    fn mean_depth(points: &[Vec3]) -> f64 {
+        points.iter().map(|p| p.z).sum::<f64>() / points.len() as f64
+    }
+
+    #[test]
+    fn ray_columns_keep_the_pixels_mean_depth_where_voxels_lose_it() {
+        // Over ropes at eight places against the grid, as a moving rope is.
+        let (mut col_bias, mut vox_bias) = (0.0, 0.0);
+        for k in 0..8 {
+            let pixels = rope_surface_pixels(0.001 * k as f64, 0.6 + 0.001 * k as f64);
+            let want = mean_depth(&pixels);
+            col_bias += (mean_depth(&ray_column_downsample(&pixels, 0.008)) - want) / 8.0;
+            vox_bias += (mean_depth(&voxel_downsample(&pixels, 0.008)) - want) / 8.0;
+        }
+        // Measured: columns +0.53 mm (partial columns at the silhouette still
+        // count as full points, on a smaller scale), voxels +1.01 mm.
+        assert!(col_bias.abs() < 0.0007, "columns {col_bias} m");
+        // Why the columns exist: cubes cut by the silhouette hold far points only.
+        assert!(
+            vox_bias > 0.0009 && vox_bias > 1.5 * col_bias,
+            "voxels {vox_bias} m"
+        );
+    }
+
+    #[test]
+    fn ray_columns_split_where_depth_jumps_and_drop_bad_points() {
+        // One column: rope surface 0.600-0.604 m, then the table at 0.615 m
+        // (an aligned depth image's edge pixels), a flying point far behind,
+        // and points no ray can have.
+        let mut pts: Vec<Vec3> = (0..9)
+            .map(|i| Vec3::new(0.0001, 0.0001, 0.600 + 0.0005 * i as f64))
+            .collect();
+        pts.extend([0.615, 0.616].map(|z| Vec3::new(0.0001, 0.0001, z)));
+        pts.push(Vec3::new(0.0001, 0.0001, 0.9));
+        pts.extend([
+            Vec3::new(f64::NAN, 0.0, 0.6),
+            Vec3::new(0.0, 0.0, -0.6),
+            Vec3::new(0.0, 0.0, 0.0),
+        ]);
+        let out = ray_column_downsample(&pts, 0.008);
+        let depths: Vec<f64> = out.iter().map(|p| p.z).collect();
+        assert_eq!(depths.len(), 3, "{depths:?}");
+        assert!((depths[0] - 0.602).abs() < 1e-9);
+        assert!((depths[1] - 0.6155).abs() < 1e-9);
+        assert!((depths[2] - 0.9).abs() < 1e-9);
+        // A column that runs deep in small steps (a rope seen end-on) is cut
+        // every COLUMN_SPAN_RATIO leaves.
+        let end_on: Vec<Vec3> = (0..100)
+            .map(|i| Vec3::new(0.0, 0.0, 0.6 + 0.001 * i as f64))
+            .collect();
+        let cut = ray_column_downsample(&end_on, 0.008);
+        assert_eq!(cut.len(), 5, "{cut:?}");
+        assert!(ray_column_downsample(&[], 0.008).is_empty());
+    }
+
+    #[test]
+    fn ray_columns_do_not_depend_on_input_order() {
+        let mut pts = rope_surface_pixels(0.003, 0.6);
+        let a = ray_column_downsample(&pts, 0.008);
+        pts.reverse();
+        let b = ray_column_downsample(&pts, 0.008);
+        assert_eq!(a.len(), b.len());
+        for (p, q) in a.iter().zip(&b) {
+            assert!((p - q).norm() < 1e-15);
+        }
+    }
+
     #[test]
     fn floor_to_i64_is_floor() {
         for x in [
@@ -323,6 +540,7 @@ mod tests {
             max_depth: 3.0,
             voxel_size: 0.0,
             axis_offset: 0.0,
+            downsampling: Downsampling::default(),
         };
         let mask = Mask {
             width: 3,
