@@ -559,8 +559,8 @@ fn a_gripper_hiding_the_held_end_does_not_drag_it_off_along_its_arm() {
     // The rules before the fix: hidden ends carried by Eq. 6-7 alone (with
     // the paper's D_k, which hands EM's slide along the arm to the hidden
     // end), no length cap, no free-space check, polyline resampling, EM's
-    // whole move of the anchors, a fixed alpha, and the voxel grid's cloud
-    // the issue was reported with.
+    // whole move of the anchors, hidden nodes out of EM, a fixed alpha, and
+    // the voxel grid's cloud the issue was reported with.
     let mut before = Params {
         downsampling: upetrack::perception::point_cloud::Downsampling::VoxelGrid,
         ..Params::default()
@@ -571,6 +571,7 @@ fn a_gripper_hiding_the_held_end_does_not_drag_it_off_along_its_arm() {
     before.upetrack.across_rope_displacement = false;
     before.upetrack.smooth_resampling = false;
     before.upetrack.anchor_across_only = false;
+    before.upetrack.hidden_nodes_absorb = false;
     before.upetrack.rest_speed = 0.0;
     let (_, theirs) = track_scenario_in(ScenarioKind::GripperSwing, v, 90, before);
     eprintln!(

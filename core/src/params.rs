@@ -132,6 +132,7 @@ impl Params {
                 smooth_resampling: false,
                 rest_speed: 0.0,
                 anchor_across_only: false,
+                hidden_nodes_absorb: false,
                 ..upe
             },
             ..Self::default()
@@ -297,6 +298,7 @@ mod tests {
         );
         assert!(!p.upetrack.free_space && !p.upetrack.conserve_length);
         assert!(!p.upetrack.across_rope_displacement && !p.upetrack.smooth_resampling);
+        assert!(!p.upetrack.hidden_nodes_absorb);
         // Everything else is the defaults'.
         let d = Params::default();
         assert_eq!(

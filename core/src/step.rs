@@ -65,6 +65,10 @@ pub struct StepInput<'a> {
     /// The tracker's shared visibility of the previous nodes (its loss
     /// test, UPETrack's visibility stage); an algorithm may use its own.
     pub visible: &'a [bool],
+    /// The hidden nodes that still have `V_lim` points within `r_vis`: the
+    /// relative visibility test hid them (an occlusion's edge, a thinning
+    /// view). Empty when not known.
+    pub partly_seen: &'a [bool],
     /// The camera.
     pub camera: &'a CameraIntrinsics,
     /// This frame's images (depth, mask, rectangles), for an algorithm that

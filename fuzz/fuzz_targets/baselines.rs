@@ -37,6 +37,7 @@ fuzz_target!(|data: &[u8]| {
             previous: prev,
             cloud,
             visible: &visible,
+            partly_seen: &[],
             camera: &camera,
             evidence: None,
             rest_length: None,

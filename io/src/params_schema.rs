@@ -295,6 +295,13 @@ pub const PARAMETERS: &[ParamInfo] = &[
         ParamKind::Bool,
     ),
     p(
+        "hidden_nodes_absorb",
+        Upetrack,
+        "hidden absorb",
+        "Hidden nodes explain the points near them in EM without moving (off: the paper's EM)",
+        ParamKind::Bool,
+    ),
+    p(
         "rest_speed",
         Upetrack,
         "rest speed",

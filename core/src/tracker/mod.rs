@@ -19,7 +19,9 @@ use crate::upe::explain::StepExplanation;
 use crate::upe::occlusion::UpeReport;
 use crate::upe::registration::EmReport;
 use crate::upe::resampling::{polyline_length, resample_uniform};
-use crate::upe::visibility::{neighbour_count, visible_nodes_relative};
+use crate::upe::visibility::{
+    classify_nodes, neighbour_count, visible_nodes_relative, NodeVisibility,
+};
 use crate::upe::UpeTrackStep;
 
 mod stepper;
@@ -331,7 +333,8 @@ impl Tracker {
 
         let prev = state.nodes.clone();
         let p = &self.params;
-        let visible = self.visibility(&prev, &obs.cloud);
+        let classes = self.visibility(&prev, &obs.cloud);
+        let visible = &classes.visible;
         if !visible.iter().any(|&v| v) {
             return self.initialise_or_lose(frame, obs, Loss::JustLost);
         }
@@ -344,7 +347,7 @@ impl Tracker {
             }
         }
         let camera = self.camera;
-        let input = self.step_input(&camera, frame, obs, &prev, &visible);
+        let input = self.step_input(&camera, frame, obs, &prev, &classes);
         let out = self.stepper.step(&input, &self.params);
         if self.contradicts_evidence(&out.nodes, &obs.cloud, &out.report) {
             if let Ok(mut again) = self.try_initialise(frame, obs) {
@@ -367,9 +370,9 @@ impl Tracker {
     }
 
     /// The shared visibility test of the `previous` nodes against `cloud`.
-    fn visibility(&self, previous: &[Vec3], cloud: &[Vec3]) -> Vec<bool> {
+    fn visibility(&self, previous: &[Vec3], cloud: &[Vec3]) -> NodeVisibility {
         let p = &self.params;
-        visible_nodes_relative(
+        classify_nodes(
             previous,
             cloud,
             p.visibility_radius,
@@ -386,12 +389,13 @@ impl Tracker {
         frame: &'a Frame<'a>,
         obs: &'a Observation,
         previous: &'a [Vec3],
-        visible: &'a [bool],
+        classes: &'a NodeVisibility,
     ) -> StepInput<'a> {
         StepInput {
             previous,
             cloud: &obs.cloud,
-            visible,
+            visible: &classes.visible,
+            partly_seen: &classes.partly_seen,
             camera,
             evidence: Some(Evidence {
                 frame,
@@ -575,18 +579,18 @@ impl Tracker {
             .iter()
             .map(|y| neighbour_count(y, &obs.cloud, radius))
             .collect();
-        let visible = self.visibility(&previous, &obs.cloud);
+        let classes = self.visibility(&previous, &obs.cloud);
         let tracked = output.status == FrameStatus::Tracked;
         let step = (tracked && self.params.algorithm == Algorithm::Upetrack).then(|| {
             let camera = self.camera;
-            let input = self.step_input(&camera, frame, obs, &previous, &visible);
+            let input = self.step_input(&camera, frame, obs, &previous, &classes);
             UpeTrackStep::explain(&input, &self.params.upetrack).1
         });
         FrameExplanation {
             output,
             previous,
             neighbour_counts,
-            visible,
+            visible: classes.visible,
             step,
         }
     }

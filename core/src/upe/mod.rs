@@ -86,6 +86,13 @@ pub struct UpeTrackParams {
     /// spacing), which is no motion of the rope. Default true; false is the
     /// paper's EM.
     pub anchor_across_only: bool,
+    /// Nodes the relative visibility test hid although they have `V_lim`
+    /// points within `r_vis` (`StepInput::partly_seen`) take part in EM's
+    /// E-step as fixed components: their points are explained by them
+    /// instead of pulling the visible node next to them into the hidden
+    /// run. Default true; false is the paper's EM (hidden nodes take no
+    /// part).
+    pub hidden_nodes_absorb: bool,
     /// Weight of the uniform outlier component (`w`, Eq. 3). Default 0.1.
     pub outlier_weight: f64,
     /// EM stops when no node moves more than this in an iteration, metres. Default 0.1 mm.
@@ -113,6 +120,7 @@ impl Default for UpeTrackParams {
             smooth_resampling: true,
             rest_speed: DEFAULT_REST_SPEED,
             anchor_across_only: true,
+            hidden_nodes_absorb: true,
             outlier_weight: 0.1,
             em_tolerance: 1e-4,
             em_max_iterations: 10,
@@ -248,10 +256,16 @@ fn run_step(
                 iterations.push(explain::EmStage::of(&it));
             }
         };
+        let fixed: &[bool] = if settings.hidden_nodes_absorb {
+            input.partly_seen
+        } else {
+            &[]
+        };
         let em = register_observed(
             input.cloud,
             &mut nodes,
             input.visible,
+            fixed,
             &settings.em(),
             &mut observe,
         );
@@ -322,6 +336,7 @@ mod tests {
             previous: &previous,
             cloud: &cloud,
             visible: &visible,
+            partly_seen: &[],
             camera: &camera,
             evidence: None,
             rest_length,
@@ -382,6 +397,7 @@ mod tests {
             previous: &previous,
             cloud: &cloud,
             visible: &visible,
+            partly_seen: &[],
             camera: &camera,
             evidence: Some(evidence),
             rest_length: None,

@@ -139,23 +139,34 @@ pub fn register(
     active: &[bool],
     settings: &EmSettings,
 ) -> EmReport {
-    register_observed(cloud, nodes, active, settings, &mut |_| {})
+    register_observed(cloud, nodes, active, &[], settings, &mut |_| {})
 }
 
-/// [`register`], telling `observe` the state at the start of every iteration.
+/// [`register`] with the nodes marked `fixed` (and not `active`) taking part
+/// in the E-step as components that explain the points near them and never
+/// move (`K` counts them; `sigma^2` is the active nodes'), telling `observe`
+/// the state at the start of every iteration.
 pub fn register_observed(
     cloud: &[Vec3],
     nodes: &mut [Vec3],
     active: &[bool],
+    fixed: &[bool],
     settings: &EmSettings,
     observe: &mut dyn FnMut(EmIteration<'_>),
 ) -> EmReport {
     let participating: Vec<bool> = (0..nodes.len())
         .map(|m| active.get(m).copied().unwrap_or(false) && math::is_finite(&nodes[m]))
         .collect();
-    let idx: Vec<usize> = (0..nodes.len()).filter(|&m| participating[m]).collect();
+    // The E-step's components: the moving nodes, and the fixed ones.
+    let idx: Vec<usize> = (0..nodes.len())
+        .filter(|&m| {
+            participating[m]
+                || (fixed.get(m).copied().unwrap_or(false) && math::is_finite(&nodes[m]))
+        })
+        .collect();
+    let moves: Vec<bool> = idx.iter().map(|&m| participating[m]).collect();
     let mut variance = settings.min_variance;
-    if idx.is_empty() || cloud.is_empty() {
+    if !participating.contains(&true) || cloud.is_empty() {
         return EmReport {
             iterations: 0,
             variance,
@@ -250,7 +261,7 @@ pub fn register_observed(
         let mut spread = 0.0;
         let mut total = 0.0;
         for (j, &m) in idx.iter().enumerate() {
-            if p1[j] > MIN_RESPONSIBILITY {
+            if moves[j] && p1[j] > MIN_RESPONSIBILITY {
                 let y = px[j] / p1[j];
                 max_shift2 = max_shift2.max((y - nodes[m]).norm_squared());
                 nodes[m] = y;
@@ -324,6 +335,37 @@ mod tests {
         // The visible node takes the whole cloud: it ends at its mean x.
         assert!((nodes[0].x - 0.0095).abs() < 1e-4, "{:?}", nodes[0]);
         assert!(nodes[0].y.abs() < 1e-4);
+    }
+
+    /// Regression for "a tail hidden by the relative visibility test hands
+    /// its points to the last visible node, which runs 21 cm into it"
+    /// (librealsense recordings, last frame).
+    #[test]
+    fn hidden_nodes_absorb_their_points_and_do_not_pull_the_visible_ones() {
+        // The visible node's own points around x = 0; a few points around
+        // the hidden node at x = 30 mm.
+        let mut cloud: Vec<Vec3> = (-5..=5)
+            .map(|i| Vec3::new(i as f64 * 0.001, 0.0, 0.6))
+            .collect();
+        cloud.extend((-1..=1).map(|i| Vec3::new(0.03 + i as f64 * 0.001, 0.0, 0.6)));
+        let hidden = Vec3::new(0.03, 0.0, 0.6);
+        let start = [Vec3::new(0.002, 0.0, 0.6), hidden];
+        let mut nodes = start;
+        let (active, fixed) = ([true, false], [false, true]);
+        register_observed(
+            &cloud,
+            &mut nodes,
+            &active,
+            &fixed,
+            &settings(),
+            &mut |_| {},
+        );
+        assert_eq!(nodes[1], hidden);
+        assert!(nodes[0].x.abs() < 1e-4, "{:?}", nodes[0]);
+        // The paper's EM: the visible node takes the hidden node's points too.
+        let mut nodes = start;
+        register(&cloud, &mut nodes, &[true, false], &settings());
+        assert!(nodes[0].x > 0.004, "{:?}", nodes[0]);
     }
 
     #[test]

@@ -37,6 +37,28 @@ pub fn visible_nodes_relative(
     min_points: usize,
     min_fraction: f64,
 ) -> Vec<bool> {
+    classify_nodes(previous, cloud, radius, min_points, min_fraction).visible
+}
+
+/// The nodes by what the cloud shows of them.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct NodeVisibility {
+    /// Visible under [`visible_nodes_relative`]'s two tests.
+    pub visible: Vec<bool>,
+    /// Hidden by the relative test alone: `q >= V_lim`, but below the
+    /// fraction of the median.
+    pub partly_seen: Vec<bool>,
+}
+
+/// [`visible_nodes_relative`], also telling which hidden nodes passed the
+/// paper's test (`q >= V_lim`) and failed only the relative one.
+pub fn classify_nodes(
+    previous: &[Vec3],
+    cloud: &[Vec3],
+    radius: f64,
+    min_points: usize,
+    min_fraction: f64,
+) -> NodeVisibility {
     let counts: Vec<usize> = previous
         .iter()
         .map(|y| neighbour_count(y, cloud, radius))
@@ -52,13 +74,44 @@ pub fn visible_nodes_relative(
         seen.sort_unstable();
         (min_fraction * seen[seen.len() / 2] as f64).max(min_points as f64)
     };
-    counts.iter().map(|&q| q as f64 >= threshold).collect()
+    let visible: Vec<bool> = counts.iter().map(|&q| q as f64 >= threshold).collect();
+    let partly_seen = counts
+        .iter()
+        .zip(&visible)
+        .map(|(&q, &v)| !v && q >= min_points)
+        .collect();
+    NodeVisibility {
+        visible,
+        partly_seen,
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use alloc::vec;
+
+    #[test]
+    fn a_node_hidden_by_the_relative_test_alone_is_partly_seen() {
+        let nodes = vec![
+            Vec3::zeros(),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(2.0, 0.0, 0.0),
+            Vec3::new(3.0, 0.0, 0.0),
+        ];
+        let mut cloud = Vec::new();
+        for (node, count) in [(0.0, 10), (1.0, 10), (2.0, 3)] {
+            cloud.extend((0..count).map(|i| Vec3::new(node + 0.001 * i as f64, 0.0, 0.0)));
+        }
+        let c = classify_nodes(&nodes, &cloud, 0.02, 3, 0.5);
+        assert_eq!(c.visible, [true, true, false, false]);
+        // Three points pass the paper's test; no points at all do not.
+        assert_eq!(c.partly_seen, [false, false, true, false]);
+        assert_eq!(
+            c.visible,
+            visible_nodes_relative(&nodes, &cloud, 0.02, 3, 0.5)
+        );
+    }
 
     #[test]
     fn counts_against_the_threshold() {
