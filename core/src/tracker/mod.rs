@@ -37,6 +37,11 @@ pub const MIN_NODES_IN_FREE_SPACE: usize = 3;
 pub const UNEXPLAINED_REACH: f64 = 2.0;
 /// Share of the cloud left unexplained that contradicts the state.
 pub const UNEXPLAINED_LIMIT: f64 = 0.3;
+/// After a jump re-initialisation was refused, it is tried again only once
+/// the cloud has grown by this fraction: the attempt costs a whole
+/// initialisation, and a rope that became long enough to pass the length
+/// rule shows more points than one that did not.
+pub const JUMP_RETRY_GROWTH: f64 = 0.1;
 
 /// Errors building or reconfiguring a tracker.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -146,6 +151,8 @@ pub struct TrackerSnapshot {
     known_radius: Option<f64>,
     #[cfg_attr(feature = "serde", serde(default))]
     rest_length: Option<f64>,
+    #[cfg_attr(feature = "serde", serde(default))]
+    refused_jump_cloud: Option<usize>,
     stepper: Stepper,
 }
 
@@ -163,6 +170,9 @@ pub struct Tracker {
     /// Length of the node polyline at the first initialisation, metres
     /// (chords, as the tracked nodes measure it).
     rest_length: Option<f64>,
+    /// Cloud size at the last refused jump re-initialisation, while fewer
+    /// than `reinit_visible_fraction` of the nodes stay visible.
+    refused_jump_cloud: Option<usize>,
     /// The per-frame step of `params.algorithm`.
     stepper: Stepper,
 }
@@ -185,6 +195,7 @@ impl Tracker {
             known_length: None,
             known_radius: None,
             rest_length: None,
+            refused_jump_cloud: None,
             stepper: Stepper::new(params.algorithm),
         })
     }
@@ -244,6 +255,7 @@ impl Tracker {
             known_length: self.known_length,
             known_radius: self.known_radius,
             rest_length: self.rest_length,
+            refused_jump_cloud: self.refused_jump_cloud,
             stepper: self.stepper.clone(),
         }
     }
@@ -263,6 +275,7 @@ impl Tracker {
         self.known_length = snapshot.known_length;
         self.known_radius = snapshot.known_radius;
         self.rest_length = snapshot.rest_length;
+        self.refused_jump_cloud = snapshot.refused_jump_cloud;
         self.stepper = snapshot.stepper;
         if restart {
             self.stepper = Stepper::new(self.params.algorithm);
@@ -277,6 +290,7 @@ impl Tracker {
         self.known_length = None;
         self.known_radius = None;
         self.rest_length = None;
+        self.refused_jump_cloud = None;
         self.stepper = Stepper::new(self.params.algorithm);
     }
 
@@ -340,11 +354,21 @@ impl Tracker {
         }
         // Few nodes left on the rope: it may have jumped. A full-length rope
         // in view replaces the state; otherwise tracking goes on.
+        // A refused attempt is tried again only once the cloud has grown.
         let seen = visible.iter().filter(|&&v| v).count() as f64;
         if seen < p.reinit_visible_fraction * prev.len() as f64 {
-            if let Ok(out) = self.try_initialise(frame, obs) {
-                return out;
+            let cloud = obs.cloud.len();
+            let worth_trying = self
+                .refused_jump_cloud
+                .is_none_or(|n| cloud as f64 > n as f64 * (1.0 + JUMP_RETRY_GROWTH));
+            if worth_trying {
+                match self.try_initialise(frame, obs) {
+                    Ok(out) => return out,
+                    Err(_) => self.refused_jump_cloud = Some(cloud),
+                }
             }
+        } else {
+            self.refused_jump_cloud = None;
         }
         let camera = self.camera;
         let input = self.step_input(&camera, frame, obs, &prev, &classes);
@@ -469,6 +493,7 @@ impl Tracker {
             p.visibility_min_points as usize,
             p.visibility_min_fraction,
         );
+        self.refused_jump_cloud = None;
         self.state = Some(TrackState {
             nodes: init.nodes.clone(),
             lost: false,
