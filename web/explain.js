@@ -49,7 +49,7 @@ function steps(v) {
     },
     {
       name: 'cloud', title: 'Point cloud X^t',
-      text: `${v.deprojected_points} of them have a valid depth and are deprojected to 3D; ${p.downsampling === 'voxel_grid' ? `a ${mm(p.voxel_size)} mm voxel grid keeps one centroid per cube` : `columns along the viewing rays, ${mm(p.voxel_size / 2)} mm wide, split where the depth jumps, keep one centroid each (the mean depth of their pixels, which a voxel grid would push deeper)`}: ${v.cloud_px.length / 2} points, each pushed π/4 of the rope's radius away from the camera, from the rope's surface to its axis.`,
+      text: `${v.deprojected_points} of them have a valid depth and are deprojected to 3D; ${p.downsampling === 'voxel_grid' || (p.downsampling === 'auto' && p.algorithm !== 'upetrack') ? `a ${mm(p.voxel_size)} mm voxel grid keeps one centroid per cube` : `columns along the viewing rays, ${mm(p.voxel_size / 2)} mm wide, split where the depth jumps, keep one centroid each (the mean depth of their pixels, which a voxel grid would push deeper)`}: ${v.cloud_px.length / 2} points, each pushed π/4 of the rope's radius away from the camera, from the rope's surface to its axis.`,
       draw: () => { dim(); dots(v.cloud_px, COLOURS.cloud, 2); },
     },
   ];

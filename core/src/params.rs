@@ -42,9 +42,9 @@ pub struct Params {
     pub visibility_min_fraction: f64,
     /// Voxel-grid leaf size for downsampling the cloud, metres (0 keeps all points). Default 8 mm.
     pub voxel_size: f64,
-    /// How the cloud is downsampled at that leaf size. Default ray columns
-    /// (the mean depth of the pixels each point stands for); the voxel grid
-    /// is upstream TrackDLO's.
+    /// How the cloud is downsampled at that leaf size. Default `auto`: ray
+    /// columns for UPETrack (each point the mean depth of its pixels), the
+    /// voxel grid for the baselines (their published pipelines').
     pub downsampling: Downsampling,
     /// Radius of the rope, metres: the cloud (its visible surface) is moved
     /// `pi/4` of it away from the camera to lie on the centre line. 0 turns
@@ -95,7 +95,7 @@ impl Default for Params {
             visibility_min_points: 3,
             visibility_min_fraction: 0.5,
             voxel_size: 0.008,
-            downsampling: Downsampling::RayColumns,
+            downsampling: Downsampling::Auto,
             dlo_radius: 0.0075,
             estimate_radius: true,
             min_depth: 0.1,
@@ -133,6 +133,7 @@ impl Params {
                 rest_speed: 0.0,
                 anchor_across_only: false,
                 hidden_nodes_absorb: false,
+                extend_short_ends: false,
                 ..upe
             },
             ..Self::default()
@@ -248,7 +249,16 @@ impl Params {
             max_depth: self.max_depth,
             voxel_size: self.voxel_size,
             axis_offset: radius * SURFACE_TO_AXIS_RATIO,
-            downsampling: self.downsampling,
+            downsampling: self.downsampling(),
+        }
+    }
+
+    /// The downsampling in force: `auto` resolved for `algorithm`.
+    pub fn downsampling(&self) -> Downsampling {
+        match (self.downsampling, self.algorithm) {
+            (Downsampling::Auto, Algorithm::Upetrack) => Downsampling::RayColumns,
+            (Downsampling::Auto, _) => Downsampling::VoxelGrid,
+            (chosen, _) => chosen,
         }
     }
 
@@ -298,7 +308,7 @@ mod tests {
         );
         assert!(!p.upetrack.free_space && !p.upetrack.conserve_length);
         assert!(!p.upetrack.across_rope_displacement && !p.upetrack.smooth_resampling);
-        assert!(!p.upetrack.hidden_nodes_absorb);
+        assert!(!p.upetrack.hidden_nodes_absorb && !p.upetrack.extend_short_ends);
         // Everything else is the defaults'.
         let d = Params::default();
         assert_eq!(
@@ -354,6 +364,20 @@ mod tests {
         let c = Params::default().cloud();
         assert!((c.axis_offset - 0.0075 * core::f64::consts::FRAC_PI_4).abs() < 1e-15);
         assert_eq!((c.min_depth, c.max_depth, c.voxel_size), (0.1, 3.0, 0.008));
+        // Each algorithm's own downsampling unless one is chosen.
+        assert_eq!(c.downsampling, Downsampling::RayColumns);
+        for algorithm in [Algorithm::Cpd, Algorithm::Trackdlo] {
+            let b = Params {
+                algorithm,
+                ..Params::default()
+            };
+            assert_eq!(b.cloud().downsampling, Downsampling::VoxelGrid);
+            let chosen = Params {
+                downsampling: Downsampling::RayColumns,
+                ..b
+            };
+            assert_eq!(chosen.cloud().downsampling, Downsampling::RayColumns);
+        }
     }
 
     #[test]

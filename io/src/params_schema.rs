@@ -158,9 +158,9 @@ pub const PARAMETERS: &[ParamInfo] = &[
         "downsampling",
         Shared,
         "cells",
-        "Columns along the viewing rays (each point the pixels' mean depth) or a voxel grid",
+        "Columns along the viewing rays (each point its pixels' mean depth) or a voxel grid; auto: columns for UPETrack, the grid for the baselines",
         ParamKind::Choice {
-            choices: &["ray_columns", "voxel_grid"],
+            choices: &["auto", "ray_columns", "voxel_grid"],
         },
     ),
     p(
@@ -299,6 +299,13 @@ pub const PARAMETERS: &[ParamInfo] = &[
         Upetrack,
         "hidden absorb",
         "Hidden nodes explain the points near them in EM without moving (off: the paper's EM)",
+        ParamKind::Bool,
+    ),
+    p(
+        "extend_short_ends",
+        Upetrack,
+        "ends' length",
+        "A rope shorter than its length gets it back along its ends, over rope pixels or out of the image",
         ParamKind::Bool,
     ),
     p(

@@ -69,6 +69,22 @@ pub struct Evidence<'a> {
 }
 
 impl Evidence<'_> {
+    /// `true` when the rope may go on at `p` as the images show it: the
+    /// pixel `p` projects to is rope-coloured, or `p` is out of view (behind
+    /// the camera, outside the image). Unlike [`Evidence::sight`] it looks
+    /// at that one pixel, so a rope's end does not go on past its tip just
+    /// because the window around the point still holds the tip's pixels;
+    /// nor under an occluder, where nothing says which way a hidden tip
+    /// goes.
+    pub fn shows_rope_at(&self, p: &Vec3) -> bool {
+        let Some(q) = self.camera.project(p) else {
+            return true;
+        };
+        let (u, v) = (libm::round(q.x) as i64, libm::round(q.y) as i64);
+        let (w, h) = (self.frame.width as i64, self.frame.height as i64);
+        u < 0 || v < 0 || u >= w || v >= h || self.mask.get(u, v)
+    }
+
     /// What the images say about `p` (camera frame, metres).
     pub fn sight(&self, p: &Vec3) -> Sight {
         let Some(q) = self.camera.project(p) else {
@@ -179,6 +195,31 @@ mod tests {
     use super::fixture::Table;
     use super::*;
     use crate::perception::segmentation::Mask;
+
+    #[test]
+    fn a_rope_goes_on_only_over_rope_pixels_or_out_of_view() {
+        let mut t = Table::new(80, 40, 40.0, 600);
+        t.mask.data[20 * 80 + 46] = true;
+        t.depth[20 * 80 + 10] = 500; // a surface in front
+        t.depth[20 * 80 + 12] = 0; // no depth
+        let rect = [Rect {
+            x: 60,
+            y: 15,
+            w: 5,
+            h: 10,
+        }];
+        let f = t.frame();
+        let e = t.evidence(&f, &rect, 0.05);
+        let shows = |u: f64| e.shows_rope_at(&t.at(u, 20.0, 0.59));
+        assert!(shows(46.0)); // rope colour
+        assert!(shows(200.0) && shows(-3.0)); // outside the image
+        assert!(e.shows_rope_at(&Vec3::new(0.0, 0.0, -1.0))); // behind the camera
+                                                              // Free table beside the rope pixel, and what could hide a rope but
+                                                              // does not show one: a surface in front, no depth, a rectangle.
+        for u in [45.0, 10.0, 12.0, 62.0] {
+            assert!(!shows(u), "{u}");
+        }
+    }
 
     #[test]
     fn the_window_spans_one_and_a_half_rope_radii_in_pixels() {

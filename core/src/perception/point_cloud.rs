@@ -213,15 +213,19 @@ pub const COLUMN_SPAN_RATIO: f64 = 3.0;
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum Downsampling {
-    /// Cubes of the voxel leaf (PCL's voxel grid, as the paper and
-    /// TrackDLO use it). Cubes cut by the silhouette hold only the rope's
-    /// far side and count as much as full ones: the cloud lies deeper than
-    /// the rope's surface does on average (about 2 mm at 8 mm leaves).
+    /// Each algorithm's own: ray columns for UPETrack, the voxel grid for
+    /// the baselines, as their published pipelines downsample (resolved by
+    /// `Params::cloud`; in [`CloudSettings`] it means ray columns).
+    #[default]
+    Auto,
+    /// Cubes of the voxel leaf (PCL's voxel grid, as TrackDLO and CDCPD
+    /// use it). Cubes cut by the silhouette hold only the rope's far side
+    /// and count as much as full ones: the cloud lies deeper than the
+    /// rope's surface does on average (about 1-2 mm at 8 mm leaves).
     VoxelGrid,
     /// Columns along the viewing rays, [`COLUMN_WIDTH_RATIO`] of a leaf
     /// wide, each split along its depth at gaps ([`ray_column_downsample`]):
     /// every point is the mean depth of the pixels it stands for.
-    #[default]
     RayColumns,
 }
 
@@ -307,7 +311,9 @@ pub fn ray_column_downsample(points: &[Vec3], leaf: f64) -> Vec<Vec3> {
 pub fn downsample(points: &[Vec3], settings: &CloudSettings) -> Vec<Vec3> {
     match settings.downsampling {
         Downsampling::VoxelGrid => voxel_downsample(points, settings.voxel_size),
-        Downsampling::RayColumns => ray_column_downsample(points, settings.voxel_size),
+        Downsampling::RayColumns | Downsampling::Auto => {
+            ray_column_downsample(points, settings.voxel_size)
+        }
     }
 }
 

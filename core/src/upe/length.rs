@@ -115,6 +115,92 @@ pub fn conserve_end_lengths(nodes: &mut [Vec3], known: &[bool], rest_length: f64
     report
 }
 
+/// A rope shorter than its rest length by less than this many node spacings
+/// is left as it is (the resampled polyline's own error).
+pub const MIN_SHORTFALL_SPACINGS: f64 = 0.5;
+
+/// Step of the walk along an end's tangent, in node spacings.
+pub const EXTENSION_STEP_SPACINGS: f64 = 0.25;
+
+/// What [`extend_short_ends`] added, metres, at the first and the last end.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ExtensionReport {
+    /// Added beyond node 0.
+    pub head: f64,
+    /// Added beyond node `M - 1`.
+    pub tail: f64,
+}
+
+/// How far, up to `limit`, the rope may go on straight from `end` away from
+/// `inner` (in steps of `step`) through points where `allows` says a rope
+/// may lie.
+fn reach(end: &Vec3, inner: &Vec3, limit: f64, step: f64, allows: &dyn Fn(&Vec3) -> bool) -> f64 {
+    let d = end - inner;
+    let n = math::norm(&d);
+    if !(n > math::LENGTH_EPSILON) || !(step > 0.0) {
+        return 0.0;
+    }
+    let t = d / n;
+    let mut reached = 0.0;
+    let mut k = 1;
+    loop {
+        let along = (step * k as f64).min(limit);
+        if !allows(&(end + t * along)) {
+            return reached;
+        }
+        reached = along;
+        if along >= limit {
+            return reached;
+        }
+        k += 1;
+    }
+}
+
+/// A rope found shorter than its rest length lost the difference at its
+/// ends: EM draws an end node in towards the middle of the points it sees,
+/// about half a spacing short of the tip every frame. The missing length
+/// is given back along each end's tangent, as far as `allows` (the images
+/// show rope there, or the rope leaves the image), half to each end and
+/// to the other what one cannot take. Returns the polyline with the
+/// extensions (to be resampled) and what was added.
+pub fn extend_short_ends(
+    nodes: &[Vec3],
+    rest_length: f64,
+    allows: &dyn Fn(&Vec3) -> bool,
+) -> (Vec<Vec3>, ExtensionReport) {
+    let m = nodes.len();
+    let mut report = ExtensionReport::default();
+    if m < 2 || !(rest_length > 0.0) || !nodes.iter().all(math::is_finite) {
+        return (nodes.to_vec(), report);
+    }
+    let spacing = rest_length / (m - 1) as f64;
+    let shortfall = rest_length - length(nodes);
+    if !(shortfall > MIN_SHORTFALL_SPACINGS * spacing) {
+        return (nodes.to_vec(), report);
+    }
+    let step = EXTENSION_STEP_SPACINGS * spacing;
+    let head = reach(&nodes[0], &nodes[1], shortfall, step, allows);
+    let tail = reach(&nodes[m - 1], &nodes[m - 2], shortfall, step, allows);
+    // Each end up to half, then what one cannot take to the other.
+    let (mut h, mut t) = (head.min(shortfall / 2.0), tail.min(shortfall / 2.0));
+    let left = shortfall - h - t;
+    h += left.min(head - h);
+    t += (shortfall - h - t).min(tail - t);
+    let mut out = Vec::with_capacity(m + 2);
+    if h > 0.0 {
+        let dir = (nodes[0] - nodes[1]) / math::norm(&(nodes[0] - nodes[1]));
+        out.push(nodes[0] + dir * h);
+    }
+    out.extend_from_slice(nodes);
+    if t > 0.0 {
+        let dir = (nodes[m - 1] - nodes[m - 2]) / math::norm(&(nodes[m - 1] - nodes[m - 2]));
+        out.push(nodes[m - 1] + dir * t);
+    }
+    report.head = h;
+    report.tail = t;
+    (out, report)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -249,5 +335,44 @@ mod tests {
         assert_eq!(conserve_end_lengths(&mut nodes, &[true; 10], 0.09).runs, 0);
         assert_eq!(conserve_end_lengths(&mut nodes, &[false; 10], 0.09).runs, 0);
         assert_eq!(nodes, before);
+    }
+
+    #[test]
+    fn a_short_rope_is_given_its_length_back_where_the_images_allow() {
+        // Ten nodes 1 cm apart (9 cm), a rope known to be 12 cm long.
+        let nodes = line(10, 0.01);
+        // Anything allowed: 1.5 cm at each end.
+        let (out, r) = extend_short_ends(&nodes, 0.12, &|_| true);
+        assert!((r.head - 0.015).abs() < 1e-12 && (r.tail - 0.015).abs() < 1e-12);
+        assert!((length(&out) - 0.12).abs() < 1e-12);
+        assert_eq!(out.len(), 12);
+        assert!((out[0] - Vec3::new(-0.015, 0.0, 0.6)).norm() < 1e-12);
+        // Free space beyond the head (x < 0): the tail takes it all.
+        let (out, r) = extend_short_ends(&nodes, 0.12, &|p| p.x >= 0.0);
+        assert_eq!(r.head, 0.0);
+        assert!((r.tail - 0.03).abs() < 1e-12, "{r:?}");
+        assert!((out[out.len() - 1] - Vec3::new(0.12, 0.0, 0.6)).norm() < 1e-12);
+        // Free space 1 cm past the tail too: each end as far as it may go.
+        let (_, r) = extend_short_ends(&nodes, 0.12, &|p| p.x >= 0.0 && p.x <= 0.1);
+        assert!(r.head == 0.0 && (r.tail - 0.01).abs() < 1e-12, "{r:?}");
+    }
+
+    #[test]
+    fn a_rope_at_its_length_or_a_bad_input_is_left_alone() {
+        let nodes = line(10, 0.01);
+        // Short by less than half a spacing.
+        let (out, r) = extend_short_ends(&nodes, 0.094, &|_| true);
+        assert_eq!((out, r), (nodes.clone(), ExtensionReport::default()));
+        let (out, _) = extend_short_ends(&nodes, f64::NAN, &|_| true);
+        assert_eq!(out, nodes);
+        let mut bad = nodes.clone();
+        bad[3].x = f64::NAN;
+        let (out, r) = extend_short_ends(&bad, 0.2, &|_| true);
+        assert_eq!(out.len(), 10);
+        assert_eq!(r, ExtensionReport::default());
+        // Two nodes at one place: no direction to go on in.
+        let same = [Vec3::new(0.0, 0.0, 0.6); 2];
+        let (out, r) = extend_short_ends(&same, 0.1, &|_| true);
+        assert_eq!((out.len(), r), (2, ExtensionReport::default()));
     }
 }

@@ -14,7 +14,7 @@ pub mod slide;
 pub mod visibility;
 
 use free_space::{clear_free_space, FreeSpaceReport};
-use length::{conserve_end_lengths, LengthReport};
+use length::{conserve_end_lengths, extend_short_ends, ExtensionReport, LengthReport};
 use occlusion::{estimate_hidden_with_sweeps, HiddenMotion, UpeCoefficients, UpeReport};
 use registration::{register_observed, EmReport, EmSettings, MAX_EM_ITERATIONS};
 use resampling::{resample_smooth, resample_uniform};
@@ -93,6 +93,12 @@ pub struct UpeTrackParams {
     /// run. Default true; false is the paper's EM (hidden nodes take no
     /// part).
     pub hidden_nodes_absorb: bool,
+    /// Give a rope found shorter than its rest length the difference back
+    /// along its ends' tangents, as far as the images show rope there (or
+    /// the rope leaves the image; `length::extend_short_ends`): EM draws an
+    /// end node in towards the middle of the points it sees. Default true;
+    /// false is the paper's rule (nothing keeps the length).
+    pub extend_short_ends: bool,
     /// Weight of the uniform outlier component (`w`, Eq. 3). Default 0.1.
     pub outlier_weight: f64,
     /// EM stops when no node moves more than this in an iteration, metres. Default 0.1 mm.
@@ -121,6 +127,7 @@ impl Default for UpeTrackParams {
             rest_speed: DEFAULT_REST_SPEED,
             anchor_across_only: true,
             hidden_nodes_absorb: true,
+            extend_short_ends: true,
             outlier_weight: 0.1,
             em_tolerance: 1e-4,
             em_max_iterations: 10,
@@ -206,6 +213,8 @@ pub struct UpeTrackReport {
     pub length: LengthReport,
     /// What the free-space check moved.
     pub free_space: FreeSpaceReport,
+    /// What the ends were given back of the rope's length.
+    pub extension: ExtensionReport,
 }
 
 /// UPETrack's step: GMM-EM of the visible nodes, UPE of the hidden ones,
@@ -293,6 +302,18 @@ fn run_step(
         (Some(e), true) => clear_free_space(&mut nodes, input.visible, e),
         _ => FreeSpaceReport::default(),
     };
+    let extension = match (
+        input.rest_length,
+        &input.evidence,
+        settings.extend_short_ends,
+    ) {
+        (Some(l), Some(e), true) => {
+            let (longer, report) = extend_short_ends(&nodes, l, &|p| e.shows_rope_at(p));
+            nodes = longer;
+            report
+        }
+        _ => ExtensionReport::default(),
+    };
     let resampled = if settings.smooth_resampling {
         resample_smooth(&nodes, input.previous.len())
     } else {
@@ -310,6 +331,7 @@ fn run_step(
             upe,
             length,
             free_space,
+            extension,
         },
     }
 }
