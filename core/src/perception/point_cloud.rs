@@ -250,26 +250,62 @@ pub fn ray_column_downsample(points: &[Vec3], leaf: f64) -> Vec<Vec3> {
         return Vec::new();
     }
     let inv = depth_sum / (n as f64 * COLUMN_WIDTH_RATIO * leaf);
-    const NO_COLUMN: u32 = u32::MAX;
-    let mut cells = CellIndex::new();
-    let mut column_of: Vec<u32> = Vec::with_capacity(points.len());
-    let mut counts: Vec<u32> = Vec::new();
+    // Each point's column (x, y), and the columns' bounding box.
+    let mut at: Vec<Option<(i64, i64)>> = Vec::with_capacity(points.len());
+    let (mut lo, mut hi) = ((i64::MAX, i64::MAX), (i64::MIN, i64::MIN));
     for p in points {
-        let mut column = NO_COLUMN;
-        if usable(p) {
-            let scale = inv / p.z;
-            let idx = [floor_to_i64(p.x * scale), floor_to_i64(p.y * scale), 0];
-            if let Some(key) = cell_key(idx) {
-                let c = cells.index_of(key);
+        let column = usable(p)
+            .then(|| {
+                let scale = inv / p.z;
+                (floor_to_i64(p.x * scale), floor_to_i64(p.y * scale))
+            })
+            .filter(|(x, y)| x.abs() < MAX_VOXEL_INDEX && y.abs() < MAX_VOXEL_INDEX);
+        if let Some((x, y)) = column {
+            lo = (lo.0.min(x), lo.1.min(y));
+            hi = (hi.0.max(x), hi.1.max(y));
+        }
+        at.push(column);
+    }
+    if lo.0 > hi.0 {
+        return Vec::new();
+    }
+    let (nx, ny) = ((hi.0 - lo.0 + 1) as u64, (hi.1 - lo.1 + 1) as u64);
+    // Column ids in key order (x, then y): a dense grid over the bounding box
+    // when it is small against the cloud (a camera's image), else a table.
+    const NO_COLUMN: u32 = u32::MAX;
+    let dense =
+        nx.saturating_mul(ny) <= (DENSE_COLUMNS_PER_POINT * n as u64).max(MIN_DENSE_COLUMNS);
+    let mut cells = CellIndex::new();
+    let mut counts: Vec<u32> = if dense {
+        vec![0; (nx * ny) as usize]
+    } else {
+        Vec::new()
+    };
+    let column_of: Vec<u32> = at
+        .iter()
+        .map(|column| {
+            let Some((x, y)) = *column else {
+                return NO_COLUMN;
+            };
+            let c = if dense {
+                ((x - lo.0) as u64 * ny + (y - lo.1) as u64) as usize
+            } else {
+                // In range: checked above.
+                let c = cell_key([x, y, 0]).map_or(0, |key| cells.index_of(key));
                 if c == counts.len() {
                     counts.push(0);
                 }
-                counts[c] += 1;
-                column = c as u32;
-            }
-        }
-        column_of.push(column);
-    }
+                c
+            };
+            counts[c] += 1;
+            c as u32
+        })
+        .collect();
+    let order: Vec<usize> = if dense {
+        (0..counts.len()).filter(|&c| counts[c] > 0).collect()
+    } else {
+        cells.by_key()
+    };
     // Counting sort of the points by column.
     let mut start = Vec::with_capacity(counts.len() + 1);
     let mut total = 0usize;
@@ -287,9 +323,20 @@ pub fn ray_column_downsample(points: &[Vec3], leaf: f64) -> Vec<Vec3> {
         }
     }
     let (gap, span) = (COLUMN_GAP_RATIO * leaf, COLUMN_SPAN_RATIO * leaf);
-    let mut out = Vec::new();
-    for c in cells.by_key() {
+    let mut out = Vec::with_capacity(order.len());
+    for c in order {
         let column = &mut grouped[start[c]..start[c + 1]];
+        let (zmin, zmax) = column
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+                (a.min(p.z), b.max(p.z))
+            });
+        if zmax - zmin <= gap.min(span) {
+            // One cluster whatever the order: no need to sort.
+            let sum = column.iter().fold(Vec3::zeros(), |s, p| s + p);
+            out.push(sum / column.len() as f64);
+            continue;
+        }
         column.sort_unstable_by(|a, b| a.z.total_cmp(&b.z));
         let mut first = 0;
         for k in 1..=column.len() {
@@ -306,6 +353,13 @@ pub fn ray_column_downsample(points: &[Vec3], leaf: f64) -> Vec<Vec3> {
     }
     out
 }
+
+/// The column grid is dense (one counter per column of the cloud's bounding
+/// box) while it has at most this many columns per point...
+const DENSE_COLUMNS_PER_POINT: u64 = 16;
+
+/// ...or at most this many columns (a small cloud).
+const MIN_DENSE_COLUMNS: u64 = 1 << 16;
 
 /// The cloud's points downsampled as `settings` says.
 pub fn downsample(points: &[Vec3], settings: &CloudSettings) -> Vec<Vec3> {
@@ -501,6 +555,20 @@ mod tests {
         let cut = ray_column_downsample(&end_on, 0.008);
         assert_eq!(cut.len(), 5, "{cut:?}");
         assert!(ray_column_downsample(&[], 0.008).is_empty());
+    }
+
+    #[test]
+    fn ray_columns_from_the_dense_grid_and_from_the_table_agree() {
+        // A rope's pixels (a small box: the dense grid), and the same with
+        // two far points that make the box too large for it (the table).
+        let pixels = rope_surface_pixels(0.002, 0.6);
+        let dense = ray_column_downsample(&pixels, 0.008);
+        let mut spread = pixels.clone();
+        spread.extend([Vec3::new(-500.0, -500.0, 0.6), Vec3::new(500.0, 500.0, 0.6)]);
+        let table = ray_column_downsample(&spread, 0.008);
+        assert_eq!(table.len(), dense.len() + 2);
+        // The far points are the first and the last column in key order.
+        assert_eq!(&table[1..table.len() - 1], &dense[..]);
     }
 
     #[test]
