@@ -82,7 +82,7 @@ function steps(v) {
     const next = k + 1 < v.em.length ? v.em[k + 1].nodes_px : v.registered_px;
     out.push({
       name: `em-${k + 1}`, title: `EM iteration ${k + 1} of ${v.em.length} (Eq. 1-5)`,
-      text: `E-step (Eq. 4): each point is shared among the visible nodes by its posterior P(m|x), drawn as lines (brighter: larger; below ${0.05} not drawn), with a uniform outlier term of weight w = ${fmt(p.outlier_weight, 2)} (μ in Eq. 4). M-step (Eq. 5): each visible node moves to the weighted mean of its points (small dots: where it goes), and σ² is re-estimated: σ² = ${fmt(it.variance_mm2, 2)} mm² in this iteration. Hidden nodes take no part.`,
+      text: `E-step (Eq. 4): each point is shared among the visible nodes by its posterior P(m|x), drawn as lines (brighter: larger; below ${0.05} not drawn), with a uniform outlier term of weight w = ${fmt(p.outlier_weight, 2)} (μ in Eq. 4). M-step (Eq. 5): each visible node moves to the weighted mean of its points (small dots: where it goes), and σ² is re-estimated: σ² = ${fmt(it.variance_mm2, 2)} mm² in this iteration. Hidden nodes take no part${p.hidden_nodes_absorb ? ', except those hidden by the median test alone (q ≥ V_lim): they keep their own points without moving (this project\'s addition)' : ''}.`,
       draw: () => {
         dim();
         for (let j = 0; j < it.line_point.length; j++) {
@@ -137,7 +137,7 @@ function steps(v) {
   });
   out.push({
     name: 'resampling', title: 'Resampling (Eq. 12-15)',
-    text: `The nodes are moved along the polyline they form to equal geodesic spacing l = L/(M−1) (Eq. 12-15): L = ${fmt(v.length_before_mm, 1)} mm before (thin line), ${fmt(v.length_after_mm, 1)} mm after. These are the frame's nodes.`,
+    text: `The nodes are moved along the polyline they form to equal geodesic spacing l = L/(M−1) (Eq. 12-15): L = ${fmt(v.length_before_mm, 1)} mm before (thin line), ${fmt(v.length_after_mm, 1)} mm after.${p.extend_short_ends ? ' A rope found shorter than at initialisation first had its ends extended along their tangents, over rope pixels or out of the image, by what it lacked (this project\'s addition: EM draws the end nodes in).' : ''} These are the frame's nodes.`,
     draw: () => {
       dim();
       polyline(v.before_resampling_px, 'rgba(255,255,255,0.5)');
