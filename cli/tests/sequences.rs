@@ -72,11 +72,11 @@ fn written_sequence_loads_and_matches_its_ground_truth() {
 #[test]
 fn tracker_follows_a_fast_pull_and_a_dragged_rope_with_a_hidden_tip() {
     // (scenario, bound on the clear mean, bound on the occluded mean), mm:
-    // 1.2-1.5x the figures docs/testing.md reports for these 60 frames
-    // (fast-pull 3.43, no occluder; tip-drag 1.93 clear, 2.28 hidden).
+    // 1.3-1.5x the figures docs/testing.md reports for these 60 frames
+    // (fast-pull 3.22, no occluder; tip-drag 0.74 clear, 0.99 hidden).
     for (kind, clear_bound, occluded_bound) in [
         (ScenarioKind::FastPull, 4.2, None),
-        (ScenarioKind::TipDrag, 2.9, Some(3.3)),
+        (ScenarioKind::TipDrag, 1.1, Some(1.5)),
     ] {
         let (clear, occluded) = track_scenario(kind, 60, Params::default());
         assert_eq!(!occluded.is_empty(), occluded_bound.is_some(), "{kind:?}");
@@ -151,8 +151,8 @@ fn track_command_writes_every_frame_of_the_contract() {
         &seq.camera,
         seq.first_occluded_frame(),
     );
-    // docs/testing.md: 2.04 mm, 0.84 px on these 8 frames (seed 3).
-    assert!(s.mm.mean < 3.0 && s.px.mean < 1.3, "{s:?}");
+    // docs/testing.md: 0.96 mm, 0.64 px on these 8 frames (seed 3).
+    assert!(s.mm.mean < 1.45 && s.px.mean < 0.95, "{s:?}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -261,20 +261,20 @@ fn tracker_never_panics_on_degenerate_frames() {
 /// Regression for the "hidden bend relaxes to a chord" gap: with the
 /// relative visibility test (default 0.5), nodes at the occlusion's edge
 /// count as hidden at once, and the paper's two scenarios are tracked
-/// within its accuracy (mean over occluded frames under 4 mm) with the
-/// paper's r_vis = 20 mm and V_lim = 3.
+/// well within its accuracy (mean over occluded frames under 2 mm, 1.5x
+/// docs/testing.md's figures) with the paper's r_vis = 20 mm and V_lim = 3.
 #[test]
 fn paper_scenarios_keep_the_hidden_bend_with_default_parameters() {
     for kind in [ScenarioKind::StaticS, ScenarioKind::DynamicPull] {
         let (clear, errors) = track_scenario(kind, 60, Params::default());
         assert!(
-            self::mean(&clear) < 4.0,
+            self::mean(&clear) < 2.0,
             "{kind:?}: unoccluded mean {:.2} mm",
             self::mean(&clear)
         );
         let (mean, max) = (mean(&errors), max(&errors));
         eprintln!("{kind:?} defaults: occluded mean {mean:.2} max {max:.2} mm");
-        assert!(mean < 4.0, "{kind:?}: occluded mean {mean:.2} mm");
+        assert!(mean < 2.0, "{kind:?}: occluded mean {mean:.2} mm");
         assert!(max < 20.0, "{kind:?}: occluded max {max:.2} mm");
     }
 }
@@ -298,7 +298,7 @@ fn a_resting_hidden_bend_does_not_creep_along_the_rope_or_flatten() {
         occluded(true, false),
     );
     eprintln!("static-s occluded mean: defaults {both:.2}, D_k along too {no_across:.2}, polyline resampling {no_smooth:.2} mm");
-    assert!(both < 3.0, "defaults: {both:.2} mm");
+    assert!(both < 1.25, "defaults: {both:.2} mm");
     assert!(
         both < 0.8 * no_across && both < 0.95 * no_smooth,
         "{both:.2} vs {no_across:.2} / {no_smooth:.2} mm"
@@ -452,8 +452,8 @@ fn a_hidden_tip_moves_with_the_pulled_rope_instead_of_straightening() {
     eprintln!(
         "sweep-30: occluded mean {ours:.2} mm (defaults), {papers:.2} mm (the paper's rules)"
     );
-    // docs/testing.md: 2.11 mm with the defaults on these 60 frames.
-    assert!(ours < 3.2, "occluded mean {ours:.2} mm");
+    // docs/testing.md: 0.90 mm with the defaults on these 60 frames.
+    assert!(ours < 1.35, "occluded mean {ours:.2} mm");
     assert!(ours < 0.5 * papers, "{ours:.2} vs {papers:.2}");
 }
 
@@ -664,6 +664,7 @@ fn a_gripper_hiding_the_held_end_does_not_drag_it_off_along_its_arm() {
         max(&theirs)
     );
     assert!(max(&ours) < 20.0, "max {:.2} mm", max(&ours));
+    assert!(mean(&ours) < 2.7, "occluded mean {:.2} mm", mean(&ours));
     assert!(
         mean(&ours) < 0.7 * mean(&theirs),
         "{:.2} vs {:.2}",
@@ -684,9 +685,33 @@ fn half_the_rope_hidden_stays_on_the_rope() {
         mean(&ours),
         mean(&papers)
     );
-    assert!(mean(&ours) < 3.2, "occluded mean {:.2} mm", mean(&ours));
+    assert!(mean(&ours) < 1.55, "occluded mean {:.2} mm", mean(&ours));
     assert!(max(&ours) < 20.0, "max {:.2} mm", max(&ours));
     assert!(mean(&ours) < 0.7 * mean(&papers));
+}
+
+/// Regression for "the nodes sit behind the rope's axis": the voxel grid
+/// put the cloud 1-2 mm too deep (cubes cut by the silhouette hold only
+/// the far side), so every visible node sat 1.6-1.8 mm behind the axis;
+/// the ray columns keep each point at its pixels' mean depth.
+#[test]
+fn visible_nodes_sit_on_the_axis_not_behind_it() {
+    let clear = |downsampling| {
+        let p = Params {
+            downsampling,
+            ..Params::default()
+        };
+        mean(&track_scenario(ScenarioKind::StaticS, 30, p).0)
+    };
+    use upetrack::perception::point_cloud::Downsampling;
+    let (columns, voxels) = (
+        clear(Downsampling::RayColumns),
+        clear(Downsampling::VoxelGrid),
+    );
+    eprintln!(
+        "static-s before the occlusion: ray columns {columns:.2} mm, voxel grid {voxels:.2} mm"
+    );
+    assert!(columns < 0.6 * voxels, "{columns:.2} vs {voxels:.2} mm");
 }
 
 /// Regression for "3D error 4 mm with a 0.7 px image error" on thin ropes:
@@ -705,6 +730,6 @@ fn a_thin_cable_is_placed_on_its_axis_in_depth() {
         mean(&clear),
         mean(&clear_fixed)
     );
-    assert!(mean(&clear) < 1.5, "{:.2} mm", mean(&clear));
+    assert!(mean(&clear) < 0.6, "{:.2} mm", mean(&clear));
     assert!(mean(&clear) < 0.5 * mean(&clear_fixed));
 }
