@@ -10,7 +10,7 @@ use upetrack::{Algorithm, Frame, Params, Tracker};
 use upetrack_io::eval::{frame_errors, summarise};
 use upetrack_io::run::track_sequence;
 use upetrack_io::{FolderSource, Sequence};
-use upetrack_synth::{RenderSettings, Scenario, ScenarioKind, Variant};
+use upetrack_synth::{RenderSettings, Scenario, ScenarioKind, SynthFrame, Variant};
 
 mod common;
 use common::scenes::{max, mean, track_scenario, track_scenario_in};
@@ -472,14 +472,21 @@ fn shifted(rgb: &[u8], depth: &[u16], dx: usize) -> (Vec<u8>, Vec<u16>) {
     (rgb2, depth2)
 }
 
+/// A jump: frame 0 of static-s (seed 1), its image moved right by `dx`
+/// pixels, and the scene (for its camera and colour range).
+fn a_rope_and_its_jump(dx: usize) -> (Scenario, SynthFrame, Vec<u8>, Vec<u16>) {
+    let mut s = Scenario::new(ScenarioKind::StaticS, 2, 1, RenderSettings::default());
+    let f = s.next_frame().expect("frame");
+    let (rgb2, depth2) = shifted(&f.rgb, &f.depth, dx);
+    (s, f, rgb2, depth2)
+}
+
 /// `reinit_visible_fraction`: when fewer than that fraction of the nodes
 /// keep points nearby but a full-length rope is in view, the tracker starts
 /// again from it; 0 turns the rule off and the step tracks on.
 #[test]
 fn a_jumped_rope_re_initialises_when_few_nodes_stay_visible() {
-    let mut s = Scenario::new(ScenarioKind::StaticS, 2, 1, RenderSettings::default());
-    let f = s.next_frame().expect("frame");
-    let (rgb2, depth2) = shifted(&f.rgb, &f.depth, 30);
+    let (s, f, rgb2, depth2) = a_rope_and_its_jump(30);
     let a = Frame::new(640, 480, &f.rgb, &f.depth, 0.001).expect("frame");
     let b = Frame::new(640, 480, &rgb2, &depth2, 0.001).expect("frame");
     let mut statuses = Vec::new();
@@ -560,9 +567,7 @@ fn the_end_nodes_reach_the_rope_s_tips() {
 /// the cloud grows and the attempt is made, and succeeds.
 #[test]
 fn a_refused_jump_re_initialisation_is_retried_only_once_the_cloud_grows() {
-    let mut s = Scenario::new(ScenarioKind::StaticS, 2, 1, RenderSettings::default());
-    let f = s.next_frame().expect("frame");
-    let (rgb2, depth2) = shifted(&f.rgb, &f.depth, 30);
+    let (s, f, rgb2, depth2) = a_rope_and_its_jump(30);
     let a = Frame::new(640, 480, &f.rgb, &f.depth, 0.001).expect("frame");
     let b = Frame::new(640, 480, &rgb2, &depth2, 0.001).expect("frame");
     // The left two thirds of the image hidden: most of the rope.
@@ -602,9 +607,7 @@ fn a_refused_jump_re_initialisation_is_retried_only_once_the_cloud_grows() {
 /// again, reporting the frame as recovered.
 #[test]
 fn a_state_far_from_the_rope_in_view_is_recovered_from_the_images() {
-    let mut s = Scenario::new(ScenarioKind::StaticS, 2, 1, RenderSettings::default());
-    let f = s.next_frame().expect("frame");
-    let (rgb2, depth2) = shifted(&f.rgb, &f.depth, 60);
+    let (s, f, rgb2, depth2) = a_rope_and_its_jump(60);
     let a = Frame::new(640, 480, &f.rgb, &f.depth, 0.001).expect("frame");
     let b = Frame::new(640, 480, &rgb2, &depth2, 0.001).expect("frame");
     let p = Params {
