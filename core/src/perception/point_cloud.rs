@@ -205,7 +205,8 @@ pub const COLUMN_WIDTH_RATIO: f64 = 0.5;
 pub const COLUMN_GAP_RATIO: f64 = 2.0;
 
 /// Deepest span of one ray column's cluster, as a multiple of the leaf: a
-/// rope seen end-on still gives one point per few leaves.
+/// rope seen end-on still gives one point per few leaves (chosen on the
+/// tuning subset, `docs/algorithm-notes.md`).
 pub const COLUMN_SPAN_RATIO: f64 = 3.0;
 
 /// The cloud's downsampling.
