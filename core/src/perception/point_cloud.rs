@@ -356,8 +356,9 @@ pub fn ray_column_downsample(points: &[Vec3], leaf: f64) -> Vec<Vec3> {
 }
 
 /// The column grid is dense (one counter per column of the cloud's bounding
-/// box) while it has at most this many columns per point...
-const DENSE_COLUMNS_PER_POINT: u64 = 16;
+/// box) while it has at most this many columns per point (16 bytes a
+/// point, less than the points themselves)...
+const DENSE_COLUMNS_PER_POINT: u64 = 4;
 
 /// ...or at most this many columns (a small cloud).
 const MIN_DENSE_COLUMNS: u64 = 1 << 16;
