@@ -213,9 +213,10 @@ mod tests {
         let shows = |u: f64| e.shows_rope_at(&t.at(u, 20.0, 0.59));
         assert!(shows(46.0)); // rope colour
         assert!(shows(200.0) && shows(-3.0)); // outside the image
-        assert!(e.shows_rope_at(&Vec3::new(0.0, 0.0, -1.0))); // behind the camera
-                                                              // Free table beside the rope pixel, and what could hide a rope but
-                                                              // does not show one: a surface in front, no depth, a rectangle.
+                                              // Behind the camera.
+        assert!(e.shows_rope_at(&Vec3::new(0.0, 0.0, -1.0)));
+        // Free table beside the rope pixel, and what could hide a rope but
+        // does not show one: a surface in front, no depth, a rectangle.
         for u in [45.0, 10.0, 12.0, 62.0] {
             assert!(!shows(u), "{u}");
         }

@@ -332,13 +332,11 @@ pub fn ray_column_downsample(points: &[Vec3], leaf: f64) -> Vec<Vec3> {
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
                 (a.min(p.z), b.max(p.z))
             });
-        if zmax - zmin <= gap.min(span) {
-            // One cluster whatever the order: no need to sort.
-            let sum = column.iter().fold(Vec3::zeros(), |s, p| s + p);
-            out.push(sum / column.len() as f64);
-            continue;
+        // Within one gap and one span the walk splits nowhere whatever the
+        // order: most columns need no sort.
+        if zmax - zmin > gap.min(span) {
+            column.sort_unstable_by(|a, b| a.z.total_cmp(&b.z));
         }
-        column.sort_unstable_by(|a, b| a.z.total_cmp(&b.z));
         let mut first = 0;
         for k in 1..=column.len() {
             let split = k == column.len()
@@ -428,18 +426,27 @@ mod tests {
         assert!((out[1] - Vec3::new(0.011, 0.0, 0.0)).norm() < 1e-12);
     }
 
-    #[test]
-    fn voxel_downsample_does_not_depend_on_input_order() {
-        let mut pts: Vec<Vec3> = (0..50)
-            .map(|i| Vec3::new(i as f64 * 0.0013, (i % 7) as f64 * 0.002, 0.6))
-            .collect();
-        let a = voxel_downsample(&pts, 0.005);
+    /// `downsample` gives the same points for `pts` and for them reversed.
+    fn assert_independent_of_order(
+        mut pts: Vec<Vec3>,
+        downsample: fn(&[Vec3], f64) -> Vec<Vec3>,
+        leaf: f64,
+    ) {
+        let a = downsample(&pts, leaf);
         pts.reverse();
-        let b = voxel_downsample(&pts, 0.005);
+        let b = downsample(&pts, leaf);
         assert_eq!(a.len(), b.len());
         for (p, q) in a.iter().zip(&b) {
             assert!((p - q).norm() < 1e-15);
         }
+    }
+
+    #[test]
+    fn voxel_downsample_does_not_depend_on_input_order() {
+        let pts: Vec<Vec3> = (0..50)
+            .map(|i| Vec3::new(i as f64 * 0.0013, (i % 7) as f64 * 0.002, 0.6))
+            .collect();
+        assert_independent_of_order(pts, voxel_downsample, 0.005);
     }
 
     /// The growing hash table against a sorted map: the same voxels, the
@@ -575,14 +582,11 @@ mod tests {
 
     #[test]
     fn ray_columns_do_not_depend_on_input_order() {
-        let mut pts = rope_surface_pixels(0.003, 0.6);
-        let a = ray_column_downsample(&pts, 0.008);
-        pts.reverse();
-        let b = ray_column_downsample(&pts, 0.008);
-        assert_eq!(a.len(), b.len());
-        for (p, q) in a.iter().zip(&b) {
-            assert!((p - q).norm() < 1e-15);
-        }
+        assert_independent_of_order(
+            rope_surface_pixels(0.003, 0.6),
+            ray_column_downsample,
+            0.008,
+        );
     }
 
     #[test]

@@ -19,9 +19,7 @@ use crate::upe::explain::StepExplanation;
 use crate::upe::occlusion::UpeReport;
 use crate::upe::registration::EmReport;
 use crate::upe::resampling::{polyline_length, resample_uniform};
-use crate::upe::visibility::{
-    classify_nodes, neighbour_count, visible_nodes_relative, NodeVisibility,
-};
+use crate::upe::visibility::{classify_nodes, visible_nodes_relative, NodeVisibility};
 use crate::upe::UpeTrackStep;
 
 mod stepper;
@@ -599,11 +597,6 @@ impl Tracker {
             Some(s) if !s.lost => s.nodes.clone(),
             _ => Vec::new(),
         };
-        let radius = self.params.visibility_radius;
-        let neighbour_counts = previous
-            .iter()
-            .map(|y| neighbour_count(y, &obs.cloud, radius))
-            .collect();
         let classes = self.visibility(&previous, &obs.cloud);
         let tracked = output.status == FrameStatus::Tracked;
         let step = (tracked && self.params.algorithm == Algorithm::Upetrack).then(|| {
@@ -614,7 +607,7 @@ impl Tracker {
         FrameExplanation {
             output,
             previous,
-            neighbour_counts,
+            neighbour_counts: classes.counts,
             visible: classes.visible,
             step,
         }

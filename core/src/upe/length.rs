@@ -131,21 +131,25 @@ pub struct ExtensionReport {
     pub tail: f64,
 }
 
-/// How far, up to `limit`, the rope may go on straight from `end` away from
-/// `inner` (in steps of `step`) through points where `allows` says a rope
-/// may lie.
-fn reach(end: &Vec3, inner: &Vec3, limit: f64, step: f64, allows: &dyn Fn(&Vec3) -> bool) -> f64 {
+/// The unit direction from `inner` on past `end`, if they are apart.
+fn outwards(end: &Vec3, inner: &Vec3) -> Option<Vec3> {
     let d = end - inner;
     let n = math::norm(&d);
-    if !(n > math::LENGTH_EPSILON) || !(step > 0.0) {
+    (n > math::LENGTH_EPSILON).then(|| d / n)
+}
+
+/// How far, up to `limit`, the rope may go on straight from `end` along
+/// `dir` (in steps of `step`) through points where `allows` says a rope
+/// may lie.
+fn reach(end: &Vec3, dir: &Vec3, limit: f64, step: f64, allows: &dyn Fn(&Vec3) -> bool) -> f64 {
+    if !(step > 0.0) {
         return 0.0;
     }
-    let t = d / n;
     let mut reached = 0.0;
     let mut k = 1;
     loop {
         let along = (step * k as f64).min(limit);
-        if !allows(&(end + t * along)) {
+        if !allows(&(end + dir * along)) {
             return reached;
         }
         reached = along;
@@ -179,22 +183,24 @@ pub fn extend_short_ends(
         return (nodes.to_vec(), report);
     }
     let step = EXTENSION_STEP_SPACINGS * spacing;
-    let head = reach(&nodes[0], &nodes[1], shortfall, step, allows);
-    let tail = reach(&nodes[m - 1], &nodes[m - 2], shortfall, step, allows);
+    let (first, last) = (nodes[0], nodes[m - 1]);
+    let (head_dir, tail_dir) = (outwards(&first, &nodes[1]), outwards(&last, &nodes[m - 2]));
+    let reach_along = |end: &Vec3, dir: Option<Vec3>| {
+        dir.map_or(0.0, |d| reach(end, &d, shortfall, step, allows))
+    };
+    let (head, tail) = (reach_along(&first, head_dir), reach_along(&last, tail_dir));
     // Each end up to half, then what one cannot take to the other.
     let (mut h, mut t) = (head.min(shortfall / 2.0), tail.min(shortfall / 2.0));
     let left = shortfall - h - t;
     h += left.min(head - h);
     t += (shortfall - h - t).min(tail - t);
     let mut out = Vec::with_capacity(m + 2);
-    if h > 0.0 {
-        let dir = (nodes[0] - nodes[1]) / math::norm(&(nodes[0] - nodes[1]));
-        out.push(nodes[0] + dir * h);
+    if let (Some(d), true) = (head_dir, h > 0.0) {
+        out.push(first + d * h);
     }
     out.extend_from_slice(nodes);
-    if t > 0.0 {
-        let dir = (nodes[m - 1] - nodes[m - 2]) / math::norm(&(nodes[m - 1] - nodes[m - 2]));
-        out.push(nodes[m - 1] + dir * t);
+    if let (Some(d), true) = (tail_dir, t > 0.0) {
+        out.push(last + d * t);
     }
     report.head = h;
     report.tail = t;

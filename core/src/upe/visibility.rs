@@ -43,6 +43,8 @@ pub fn visible_nodes_relative(
 /// The nodes by what the cloud shows of them.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct NodeVisibility {
+    /// Cloud points within `r_vis` of each node (`q`).
+    pub counts: Vec<usize>,
     /// Visible under [`visible_nodes_relative`]'s two tests.
     pub visible: Vec<bool>,
     /// Hidden by the relative test alone: `q >= V_lim`, but below the
@@ -81,6 +83,7 @@ pub fn classify_nodes(
         .map(|(&q, &v)| !v && q >= min_points)
         .collect();
     NodeVisibility {
+        counts,
         visible,
         partly_seen,
     }
