@@ -134,6 +134,8 @@ impl Params {
                 anchor_across_only: false,
                 hidden_nodes_absorb: false,
                 extend_short_ends: false,
+                extend_under_occluders: false,
+                keep_end_run_spacing: false,
                 ..upe
             },
             ..Self::default()
@@ -309,6 +311,7 @@ mod tests {
         assert!(!p.upetrack.free_space && !p.upetrack.conserve_length);
         assert!(!p.upetrack.across_rope_displacement && !p.upetrack.smooth_resampling);
         assert!(!p.upetrack.hidden_nodes_absorb && !p.upetrack.extend_short_ends);
+        assert!(!p.upetrack.extend_under_occluders && !p.upetrack.keep_end_run_spacing);
         // Everything else is the defaults'.
         let d = Params::default();
         assert_eq!(

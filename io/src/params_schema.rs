@@ -309,6 +309,20 @@ pub const PARAMETERS: &[ParamInfo] = &[
         ParamKind::Bool,
     ),
     p(
+        "extend_under_occluders",
+        Upetrack,
+        "ends under occluders",
+        "The ends' length may also go on under something that hides the rope (depth in front, a rectangle)",
+        ParamKind::Bool,
+    ),
+    p(
+        "keep_end_run_spacing",
+        Upetrack,
+        "hidden ends' spacing",
+        "A hidden run at an end keeps the rest spacing when the nodes are resampled (off: the paper's even spacing of the whole rope)",
+        ParamKind::Bool,
+    ),
+    p(
         "rest_speed",
         Upetrack,
         "rest speed",

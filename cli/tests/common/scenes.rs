@@ -1,8 +1,9 @@
 //! Scenarios tracked in memory from the simulator, and the statistics the
 //! accuracy tests bound.
 
+use upetrack::tracker::FrameOutput;
 use upetrack::{Frame, Params, Tracker};
-use upetrack_synth::{Scenario, ScenarioKind, Variant};
+use upetrack_synth::{Scenario, ScenarioKind, SynthFrame, Variant};
 
 /// Frame errors (mm) of a scenario tracked in memory from the simulator (no
 /// JPEG round trip), split into frames before and from the first occlusion.
@@ -18,12 +19,53 @@ pub fn track_scenario_in(
     frames: usize,
     params: Params,
 ) -> (Vec<f64>, Vec<f64>) {
+    let (mut clear, mut occluded) = (Vec::new(), Vec::new());
+    each_frame(kind, variant, frames, params, |f, out, is_occluded| {
+        let e = upetrack::metrics::frame_error(&out.nodes, &f.groundtruth).expect("error") * 1000.0;
+        if is_occluded {
+            occluded.push(e);
+        } else {
+            clear.push(e);
+        }
+    });
+    (clear, occluded)
+}
+
+/// The worst hidden run's length error of each frame with a hidden run
+/// (`upetrack_io::eval::hidden_length_error`: against the true rope's
+/// length for as many node spacings; 0.05 = 5 %).
+pub fn hidden_length_errors(
+    kind: ScenarioKind,
+    variant: Variant,
+    frames: usize,
+    params: Params,
+) -> Vec<f64> {
+    let mut errors = Vec::new();
+    each_frame(kind, variant, frames, params, |f, out, _| {
+        let truth: f64 = f.groundtruth.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
+        errors.extend(upetrack_io::eval::hidden_length_error(
+            &out.nodes,
+            &out.visible,
+            truth,
+        ));
+    });
+    errors
+}
+
+/// Tracks a scenario in memory, handing each frame, its output and whether
+/// it counts as occluded to `on`; a lost frame fails the test.
+fn each_frame(
+    kind: ScenarioKind,
+    variant: Variant,
+    frames: usize,
+    params: Params,
+    mut on: impl FnMut(&SynthFrame, &FrameOutput, bool),
+) {
     let mut s = Scenario::with_rope(kind, frames, 4, variant.render(), variant.rope());
     let camera = s.camera();
     let mut tracker = Tracker::new(params, s.camera(), s.hsv()).expect("tracker");
     let occlusions = s.occlusions.clone();
     let mut first_occluded = occlusions.first().map(|o| o.first);
-    let (mut clear, mut occluded) = (Vec::new(), Vec::new());
     while let Some(f) = s.next_frame() {
         if first_occluded.is_none() && f.occluded.iter().any(|&o| o) {
             first_occluded = Some(f.index);
@@ -38,14 +80,8 @@ pub fn track_scenario_in(
             f.index,
             out.status
         );
-        let e = upetrack::metrics::frame_error(&out.nodes, &f.groundtruth).expect("error") * 1000.0;
-        if first_occluded.is_some_and(|o| f.index >= o) {
-            occluded.push(e);
-        } else {
-            clear.push(e);
-        }
+        on(&f, &out, first_occluded.is_some_and(|o| f.index >= o));
     }
-    (clear, occluded)
 }
 
 /// Mean of a series that must have frames and finite errors (an empty

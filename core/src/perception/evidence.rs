@@ -85,6 +85,27 @@ impl Evidence<'_> {
         u < 0 || v < 0 || u >= w || v >= h || self.mask.get(u, v)
     }
 
+    /// `true` when something at the one pixel `p` projects to hides it: a
+    /// declared occlusion rectangle, or a depth measurement nearer the
+    /// camera than `p` by more than [`OCCLUDER_MARGIN`]. Like
+    /// [`Evidence::shows_rope_at`] it looks at that one pixel, so a rope's
+    /// end walked under an occluder stops at the occluder's edge.
+    pub fn hides_rope_at(&self, p: &Vec3) -> bool {
+        let Some(q) = self.camera.project(p) else {
+            return false;
+        };
+        let (u, v) = (libm::round(q.x) as i64, libm::round(q.y) as i64);
+        let (w, h) = (self.frame.width as i64, self.frame.height as i64);
+        if u < 0 || v < 0 || u >= w || v >= h {
+            return false;
+        }
+        if self.occlusions.iter().any(|r| r.contains(u, v)) {
+            return true;
+        }
+        let raw = self.frame.depth[(v * w + u) as usize];
+        raw != 0 && (raw as f64) * self.frame.depth_scale < p.z - OCCLUDER_MARGIN
+    }
+
     /// What the images say about `p` (camera frame, metres).
     pub fn sight(&self, p: &Vec3) -> Sight {
         let Some(q) = self.camera.project(p) else {
@@ -220,6 +241,31 @@ mod tests {
         for u in [45.0, 10.0, 12.0, 62.0] {
             assert!(!shows(u), "{u}");
         }
+    }
+
+    #[test]
+    fn only_an_occluder_at_its_own_pixel_hides_a_rope() {
+        let mut t = Table::new(80, 40, 40.0, 600);
+        t.mask.data[20 * 80 + 46] = true;
+        t.depth[20 * 80 + 10] = 500; // a surface 9 cm in front
+        t.depth[20 * 80 + 30] = 585; // 5 mm in front: noise
+        t.depth[20 * 80 + 12] = 0; // no depth
+        let rect = [Rect {
+            x: 60,
+            y: 15,
+            w: 5,
+            h: 10,
+        }];
+        let f = t.frame();
+        let e = t.evidence(&f, &rect, 0.05);
+        let hides = |u: f64| e.hides_rope_at(&t.at(u, 20.0, 0.59));
+        assert!(hides(10.0) && hides(62.0));
+        // Beside the occluder (its window would see it), the noise, no
+        // depth, rope colour, free table, outside the image, behind the camera.
+        for u in [11.0, 30.0, 12.0, 46.0, 45.0, 200.0, -3.0] {
+            assert!(!hides(u), "{u}");
+        }
+        assert!(!e.hides_rope_at(&Vec3::new(0.0, 0.0, -1.0)));
     }
 
     #[test]

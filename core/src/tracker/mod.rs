@@ -481,7 +481,10 @@ impl Tracker {
         } else {
             self.known_length = Some(init.length);
             self.known_radius = init.radius;
-            self.rest_length = Some(polyline_length(&init.nodes));
+            self.rest_length = Some(crate::upe::length::rest_length(
+                polyline_length(&init.nodes),
+                self.radius(),
+            ));
         }
         let p = &self.params;
         let visible = visible_nodes_relative(

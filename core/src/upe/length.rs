@@ -115,6 +115,28 @@ pub fn conserve_end_lengths(nodes: &mut [Vec3], known: &[bool], rest_length: f64
     report
 }
 
+/// Rope radii taken off the centre line's length at the first
+/// initialisation to give the rest length `L0`: that line runs to the
+/// blob's edge at both tips, which for a rounded tip is a radius past the
+/// end of the rope's axis and for a flat cut one is the axis's end. Chosen
+/// on the tuning subset with the hidden ends at the rest spacing and
+/// extended under occluders: 0 / 1 / 1.25 / 1.5 / 1.75 / 2 radii gave
+/// 3.99 / 3.81 / 3.77 / 3.79 / 3.94 / 4.05 mm (`docs/algorithm-notes.md`).
+pub const TIP_TRIM_RADII: f64 = 1.25;
+
+/// The rest length `L0` of a rope whose centre line measured
+/// `centre_line_length` at initialisation: [`TIP_TRIM_RADII`] radii
+/// shorter, but never below half the line (a radius that does not fit the
+/// rope is not trusted).
+pub fn rest_length(centre_line_length: f64, radius: f64) -> f64 {
+    let trimmed = centre_line_length - TIP_TRIM_RADII * radius.max(0.0);
+    if trimmed.is_finite() {
+        trimmed.max(0.5 * centre_line_length)
+    } else {
+        centre_line_length
+    }
+}
+
 /// A rope shorter than its rest length by less than this many node spacings
 /// is left as it is (the resampled polyline's own error).
 pub const MIN_SHORTFALL_SPACINGS: f64 = 0.5;
@@ -129,6 +151,23 @@ pub struct ExtensionReport {
     pub head: f64,
     /// Added beyond node `M - 1`.
     pub tail: f64,
+}
+
+/// Which ends of the rope [`extend_short_ends`] may extend.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct OpenEnds {
+    /// The end at node 0.
+    pub head: bool,
+    /// The end at node `M - 1`.
+    pub tail: bool,
+}
+
+impl OpenEnds {
+    /// Both ends.
+    pub const BOTH: Self = Self {
+        head: true,
+        tail: true,
+    };
 }
 
 /// The unit direction from `inner` on past `end`, if they are apart.
@@ -165,11 +204,14 @@ fn reach(end: &Vec3, dir: &Vec3, limit: f64, step: f64, allows: &dyn Fn(&Vec3) -
 /// about half a spacing short of the tip every frame. The missing length
 /// is given back along each end's tangent, as far as `allows` (the images
 /// show rope there, or the rope leaves the image), half to each end and
-/// to the other what one cannot take. Returns the polyline with the
-/// extensions (to be resampled) and what was added.
+/// to the other what one cannot take. Only the ends `open` says may be
+/// extended are (a hidden end keeps its length by
+/// [`resample_with_end_runs_at_rest`] instead). Returns the polyline with
+/// the extensions (to be resampled) and what was added.
 pub fn extend_short_ends(
     nodes: &[Vec3],
     rest_length: f64,
+    open: OpenEnds,
     allows: &dyn Fn(&Vec3) -> bool,
 ) -> (Vec<Vec3>, ExtensionReport) {
     let m = nodes.len();
@@ -185,10 +227,14 @@ pub fn extend_short_ends(
     let step = EXTENSION_STEP_SPACINGS * spacing;
     let (first, last) = (nodes[0], nodes[m - 1]);
     let (head_dir, tail_dir) = (outwards(&first, &nodes[1]), outwards(&last, &nodes[m - 2]));
-    let reach_along = |end: &Vec3, dir: Option<Vec3>| {
-        dir.map_or(0.0, |d| reach(end, &d, shortfall, step, allows))
+    let reach_along = |end: &Vec3, dir: Option<Vec3>, open: bool| match (dir, open) {
+        (Some(d), true) => reach(end, &d, shortfall, step, allows),
+        _ => 0.0,
     };
-    let (head, tail) = (reach_along(&first, head_dir), reach_along(&last, tail_dir));
+    let (head, tail) = (
+        reach_along(&first, head_dir, open.head),
+        reach_along(&last, tail_dir, open.tail),
+    );
     // Each end up to half, then what one cannot take to the other.
     let (mut h, mut t) = (head.min(shortfall / 2.0), tail.min(shortfall / 2.0));
     let left = shortfall - h - t;
@@ -205,6 +251,44 @@ pub fn extend_short_ends(
     report.head = h;
     report.tail = t;
     (out, report)
+}
+
+/// Resampling (Eq. 12-15) that keeps each hidden run at an end of the rope
+/// at the rest spacing `l0 = L0 / (M - 1)`: the `head` hidden nodes at the
+/// start of `nodes` and the `tail` at its end are placed `l0` apart along
+/// their own curve from their anchor (continued straight past their tip
+/// when the curve is short), and only the part between the two anchors is
+/// spread evenly by `resample`. Spread over the whole rope instead, the
+/// length a rope loses where nothing shows it (a held end inside a
+/// gripper's jaws) would shorten every hidden run by the same share
+/// (`docs/algorithm-notes.md`, "Hidden ends keep the rest spacing").
+/// `None` when there is no hidden end, or fewer than two nodes would be
+/// left between the anchors, or the result is not finite.
+pub fn resample_with_end_runs_at_rest(
+    nodes: &[Vec3],
+    head: usize,
+    tail: usize,
+    count: usize,
+    rest_spacing: f64,
+    resample: &dyn Fn(&[Vec3], usize) -> Vec<Vec3>,
+) -> Option<Vec<Vec3>> {
+    let n = nodes.len();
+    let ends = head.checked_add(tail)?;
+    if ends == 0 || ends + 2 > count || ends + 2 > n || !(rest_spacing > 0.0) {
+        return None;
+    }
+    let middle = resample(&nodes[head..n - tail], count - ends);
+    let (&first, &last) = (middle.first()?, middle.last()?);
+    let mut out = Vec::with_capacity(count);
+    // Each run's curve from its anchor outwards.
+    let mut head_curve = alloc::vec![first];
+    head_curve.extend(nodes[..head].iter().rev().copied());
+    out.extend(along(&head_curve, head, rest_spacing).into_iter().rev());
+    out.extend_from_slice(&middle);
+    let mut tail_curve = alloc::vec![last];
+    tail_curve.extend_from_slice(&nodes[n - tail..]);
+    out.extend(along(&tail_curve, tail, rest_spacing));
+    (out.len() == count && out.iter().all(math::is_finite)).then_some(out)
 }
 
 #[cfg(test)]
@@ -348,37 +432,108 @@ mod tests {
         // Ten nodes 1 cm apart (9 cm), a rope known to be 12 cm long.
         let nodes = line(10, 0.01);
         // Anything allowed: 1.5 cm at each end.
-        let (out, r) = extend_short_ends(&nodes, 0.12, &|_| true);
+        let (out, r) = extend_short_ends(&nodes, 0.12, OpenEnds::BOTH, &|_| true);
         assert!((r.head - 0.015).abs() < 1e-12 && (r.tail - 0.015).abs() < 1e-12);
         assert!((length(&out) - 0.12).abs() < 1e-12);
         assert_eq!(out.len(), 12);
         assert!((out[0] - Vec3::new(-0.015, 0.0, 0.6)).norm() < 1e-12);
         // Free space beyond the head (x < 0): the tail takes it all.
-        let (out, r) = extend_short_ends(&nodes, 0.12, &|p| p.x >= 0.0);
+        let (out, r) = extend_short_ends(&nodes, 0.12, OpenEnds::BOTH, &|p| p.x >= 0.0);
         assert_eq!(r.head, 0.0);
         assert!((r.tail - 0.03).abs() < 1e-12, "{r:?}");
         assert!((out[out.len() - 1] - Vec3::new(0.12, 0.0, 0.6)).norm() < 1e-12);
         // Free space 1 cm past the tail too: each end as far as it may go.
-        let (_, r) = extend_short_ends(&nodes, 0.12, &|p| p.x >= 0.0 && p.x <= 0.1);
+        let (_, r) = extend_short_ends(&nodes, 0.12, OpenEnds::BOTH, &|p| p.x >= 0.0 && p.x <= 0.1);
         assert!(r.head == 0.0 && (r.tail - 0.01).abs() < 1e-12, "{r:?}");
+    }
+
+    #[test]
+    fn a_closed_end_is_not_extended_and_the_open_one_takes_the_shortfall() {
+        let nodes = line(10, 0.01);
+        let head_closed = OpenEnds {
+            head: false,
+            tail: true,
+        };
+        let (out, r) = extend_short_ends(&nodes, 0.12, head_closed, &|_| true);
+        assert!(r.head == 0.0 && (r.tail - 0.03).abs() < 1e-12, "{r:?}");
+        assert_eq!(out[0], nodes[0]);
+        let shut = OpenEnds {
+            head: false,
+            tail: false,
+        };
+        let (out, r) = extend_short_ends(&nodes, 0.12, shut, &|_| true);
+        assert_eq!((out, r), (nodes.clone(), ExtensionReport::default()));
+    }
+
+    /// Polyline resampling for the tests (nodes spread evenly).
+    fn even(points: &[Vec3], count: usize) -> Vec<Vec3> {
+        crate::upe::resampling::resample_uniform(points, count)
+    }
+
+    #[test]
+    fn hidden_end_runs_keep_the_rest_spacing_and_the_middle_is_spread() {
+        // Ten nodes: a hidden head 0-1 compressed to 5 mm steps and bent at
+        // node 1, a visible middle 2-7 whose nodes EM bunched, a hidden
+        // tail 8-9 stretched to 2 cm steps; the rest spacing is 1 cm.
+        let mut nodes = line(10, 0.01);
+        nodes[1] = Vec3::new(0.015, 0.0, 0.6);
+        nodes[0] = Vec3::new(0.015, 0.005, 0.6);
+        nodes[3] = Vec3::new(0.021, 0.0, 0.6);
+        nodes[8] = Vec3::new(0.09, 0.0, 0.6);
+        nodes[9] = Vec3::new(0.11, 0.0, 0.6);
+        let out = resample_with_end_runs_at_rest(&nodes, 2, 2, 10, 0.01, &even).expect("runs");
+        assert_eq!(out.len(), 10);
+        // The middle (anchors 2 and 7 kept) spread evenly: 1 cm steps.
+        for (i, p) in out.iter().enumerate().take(8).skip(2) {
+            assert!((p.x - i as f64 * 0.01).abs() < 1e-12, "node {i}: {p:?}");
+        }
+        // The head: 5 mm back to the bend at node 1 and 5 mm up its curve
+        // to its old tip, then 1 cm on straight past it.
+        assert!((out[1] - Vec3::new(0.015, 0.005, 0.6)).norm() < 1e-12, "{:?}", out[1]);
+        assert!((out[0] - Vec3::new(0.015, 0.015, 0.6)).norm() < 1e-12, "{:?}", out[0]);
+        // The tail: drawn back in along its line to 1 cm steps.
+        assert!((out[8].x - 0.08).abs() < 1e-12 && (out[9].x - 0.09).abs() < 1e-12);
+    }
+
+    #[test]
+    fn end_runs_without_a_middle_to_spread_are_left_to_the_resampler() {
+        let nodes = line(6, 0.01);
+        let f = |head, tail| resample_with_end_runs_at_rest(&nodes, head, tail, 6, 0.01, &even);
+        assert_eq!(f(0, 0), None); // nothing hidden at an end
+        assert_eq!(f(3, 2), None); // one node left between the runs
+        assert_eq!(f(6, 0), None);
+        assert_eq!(f(usize::MAX, 1), None);
+        assert!(f(2, 2).is_some());
+        assert_eq!(resample_with_end_runs_at_rest(&nodes, 1, 0, 6, f64::NAN, &even), None);
+    }
+
+    #[test]
+    fn the_rest_length_leaves_out_a_rounded_tip_but_never_half_the_rope() {
+        assert!((rest_length(0.8, 0.008) - (0.8 - TIP_TRIM_RADII * 0.008)).abs() < 1e-15);
+        assert_eq!(rest_length(0.8, 0.0), 0.8);
+        assert_eq!(rest_length(0.8, -1.0), 0.8);
+        assert_eq!(rest_length(0.02, 1.0), 0.01);
+        // A radius that is not a number is not trusted.
+        assert_eq!(rest_length(0.8, f64::INFINITY), 0.8);
+        assert_eq!(rest_length(0.8, f64::NAN), 0.8);
     }
 
     #[test]
     fn a_rope_at_its_length_or_a_bad_input_is_left_alone() {
         let nodes = line(10, 0.01);
         // Short by less than half a spacing.
-        let (out, r) = extend_short_ends(&nodes, 0.094, &|_| true);
+        let (out, r) = extend_short_ends(&nodes, 0.094, OpenEnds::BOTH, &|_| true);
         assert_eq!((out, r), (nodes.clone(), ExtensionReport::default()));
-        let (out, _) = extend_short_ends(&nodes, f64::NAN, &|_| true);
+        let (out, _) = extend_short_ends(&nodes, f64::NAN, OpenEnds::BOTH, &|_| true);
         assert_eq!(out, nodes);
         let mut bad = nodes.clone();
         bad[3].x = f64::NAN;
-        let (out, r) = extend_short_ends(&bad, 0.2, &|_| true);
+        let (out, r) = extend_short_ends(&bad, 0.2, OpenEnds::BOTH, &|_| true);
         assert_eq!(out.len(), 10);
         assert_eq!(r, ExtensionReport::default());
         // Two nodes at one place: no direction to go on in.
         let same = [Vec3::new(0.0, 0.0, 0.6); 2];
-        let (out, r) = extend_short_ends(&same, 0.1, &|_| true);
+        let (out, r) = extend_short_ends(&same, 0.1, OpenEnds::BOTH, &|_| true);
         assert_eq!((out.len(), r), (2, ExtensionReport::default()));
     }
 }

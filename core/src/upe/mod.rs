@@ -14,7 +14,10 @@ pub mod slide;
 pub mod visibility;
 
 use free_space::{clear_free_space, FreeSpaceReport};
-use length::{conserve_end_lengths, extend_short_ends, ExtensionReport, LengthReport};
+use length::{
+    conserve_end_lengths, extend_short_ends, resample_with_end_runs_at_rest, ExtensionReport,
+    LengthReport, OpenEnds,
+};
 use occlusion::{estimate_hidden_with_sweeps, HiddenMotion, UpeCoefficients, UpeReport};
 use registration::{register_observed, EmReport, EmSettings, MAX_EM_ITERATIONS};
 use resampling::{resample_smooth, resample_uniform};
@@ -99,6 +102,18 @@ pub struct UpeTrackParams {
     /// end node in towards the middle of the points it sees. Default true;
     /// false is the paper's rule (nothing keeps the length).
     pub extend_short_ends: bool,
+    /// Let [`UpeTrackParams::extend_short_ends`] also go on where something
+    /// hides the rope at the pixel (depth nearer the camera, a declared
+    /// rectangle; `Evidence::hides_rope_at`): a visible end that meets an
+    /// occluder goes on under it, as a rope held in a gripper's jaws does.
+    /// Default true.
+    pub extend_under_occluders: bool,
+    /// Keep each hidden run at an end of the rope at the rest spacing
+    /// through resampling (`length::resample_with_end_runs_at_rest`), so
+    /// length the rope lost where nothing shows it is not taken from every
+    /// hidden run in turn. Default true; false is the paper's resampling
+    /// of the whole rope.
+    pub keep_end_run_spacing: bool,
     /// Weight of the uniform outlier component (`w`, Eq. 3). Default 0.1.
     pub outlier_weight: f64,
     /// EM stops when no node moves more than this in an iteration, metres. Default 0.1 mm.
@@ -128,6 +143,8 @@ impl Default for UpeTrackParams {
             anchor_across_only: true,
             hidden_nodes_absorb: true,
             extend_short_ends: true,
+            extend_under_occluders: true,
+            keep_end_run_spacing: true,
             outlier_weight: 0.1,
             em_tolerance: 1e-4,
             em_max_iterations: 10,
@@ -302,23 +319,46 @@ fn run_step(
         (Some(e), true) => clear_free_space(&mut nodes, input.visible, e),
         _ => FreeSpaceReport::default(),
     };
+    let m = input.previous.len();
+    let head = input.visible.iter().take_while(|v| !**v).count();
+    let tail = input.visible.iter().rev().take_while(|v| !**v).count();
+    let keep_ends = settings.keep_end_run_spacing && head < m;
     let extension = match (
         input.rest_length,
         &input.evidence,
         settings.extend_short_ends,
     ) {
         (Some(l), Some(e), true) => {
-            let (longer, report) = extend_short_ends(&nodes, l, &|p| e.shows_rope_at(p));
+            // A hidden end keeps its length by its spacing instead.
+            let open = OpenEnds {
+                head: !(keep_ends && head > 0),
+                tail: !(keep_ends && tail > 0),
+            };
+            let under = settings.extend_under_occluders;
+            let (longer, report) = extend_short_ends(&nodes, l, open, &|p| {
+                e.shows_rope_at(p) || (under && e.hides_rope_at(p))
+            });
             nodes = longer;
             report
         }
         _ => ExtensionReport::default(),
     };
-    let resampled = if settings.smooth_resampling {
-        resample_smooth(&nodes, input.previous.len())
-    } else {
-        resample_uniform(&nodes, input.previous.len())
+    let resample = |points: &[Vec3], count: usize| {
+        if settings.smooth_resampling {
+            resample_smooth(points, count)
+        } else {
+            resample_uniform(points, count)
+        }
     };
+    let kept = match (input.rest_length, keep_ends) {
+        // No extension was added at a hidden end, so the hidden runs are
+        // still the first `head` and last `tail` points.
+        (Some(l), true) if m >= 2 => {
+            resample_with_end_runs_at_rest(&nodes, head, tail, m, l / (m - 1) as f64, &resample)
+        }
+        _ => None,
+    };
+    let resampled = kept.unwrap_or_else(|| resample(&nodes, m));
     if let Some(t) = trace {
         t.before_resampling = nodes;
         t.resampled = resampled.clone();
@@ -364,7 +404,11 @@ mod tests {
             rest_length,
         };
         let length = |n: &[Vec3]| n.windows(2).map(|w| (w[1] - w[0]).norm()).sum::<f64>();
-        let p = UpeTrackParams::default();
+        // The whole-rope cap, with the paper's resampling after it.
+        let p = UpeTrackParams {
+            keep_end_run_spacing: false,
+            ..UpeTrackParams::default()
+        };
         let capped = UpeTrackStep.step(&input(Some(0.08)), &p);
         assert!(
             capped.report.length.runs == 1 && length(&capped.nodes) < 0.0801,
@@ -389,6 +433,15 @@ mod tests {
                 .runs,
             0
         );
+        // A rope known to be 10 cm: the default resampling keeps the hidden
+        // tail (three segments from its anchor, node 6) at the rest spacing,
+        // 10 / 9 cm; resampled as a whole, it gets the 9 cm rope's share.
+        let kept = UpeTrackStep.step(&input(Some(0.10)), &UpeTrackParams::default());
+        let tail = length(&kept.nodes[6..]);
+        assert!((tail - 3.0 * 0.10 / 9.0).abs() < 1e-9, "{tail}");
+        let spread = UpeTrackStep.step(&input(Some(0.10)), &p);
+        let share = 3.0 * length(&spread.nodes) / 9.0;
+        assert!((length(&spread.nodes[6..]) - share).abs() < 1e-3 && share < 0.031);
     }
 
     #[test]
