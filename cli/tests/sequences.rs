@@ -667,7 +667,10 @@ fn a_gripper_hiding_the_held_end_does_not_drag_it_off_along_its_arm() {
         max(&theirs)
     );
     assert!(max(&ours) < 20.0, "max {:.2} mm", max(&ours));
-    assert!(mean(&ours) < 2.7, "occluded mean {:.2} mm", mean(&ours));
+    // 2.77 mm since the visible end goes on under the gripper along its
+    // tangent (the held end turns into the jaws; `extend_under_occluders`),
+    // against 1.78 before: the price of keeping the hidden length.
+    assert!(mean(&ours) < 3.6, "occluded mean {:.2} mm", mean(&ours));
     assert!(
         mean(&ours) < 0.7 * mean(&theirs),
         "{:.2} vs {:.2}",
