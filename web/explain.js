@@ -137,7 +137,7 @@ function steps(v) {
   });
   out.push({
     name: 'resampling', title: 'Resampling (Eq. 12-15)',
-    text: `The nodes are moved along the polyline they form to equal geodesic spacing l = L/(M−1) (Eq. 12-15): L = ${fmt(v.length_before_mm, 1)} mm before (thin line), ${fmt(v.length_after_mm, 1)} mm after.${p.extend_short_ends ? ' A rope found shorter than at initialisation first had its ends extended along their tangents, over rope pixels or out of the image, by what it lacked (this project\'s addition: EM draws the end nodes in).' : ''} These are the frame's nodes.`,
+    text: `The nodes are moved along the polyline they form to equal geodesic spacing l = L/(M−1) (Eq. 12-15): L = ${fmt(v.length_before_mm, 1)} mm before (thin line), ${fmt(v.length_after_mm, 1)} mm after.${p.extend_short_ends ? ` A rope found shorter than its rest length (the length at initialisation less its rounded tips) first had its visible ends extended along their tangents, over rope pixels${p.extend_under_occluders ? ', under whatever hides the rope at the pixel' : ''} or out of the image, by what it lacked (this project\'s addition: EM draws the end nodes in).` : ''}${p.keep_end_run_spacing ? ' A hidden run at an end of the rope keeps the rest spacing along its own curve; only the part between the hidden ends is spread evenly, so length lost where nothing shows the rope is not taken from the hidden runs (this project\'s addition).' : ''} These are the frame's nodes.`,
     draw: () => {
       dim();
       polyline(v.before_resampling_px, 'rgba(255,255,255,0.5)');
