@@ -489,8 +489,16 @@ mod tests {
         }
         // The head: 5 mm back to the bend at node 1 and 5 mm up its curve
         // to its old tip, then 1 cm on straight past it.
-        assert!((out[1] - Vec3::new(0.015, 0.005, 0.6)).norm() < 1e-12, "{:?}", out[1]);
-        assert!((out[0] - Vec3::new(0.015, 0.015, 0.6)).norm() < 1e-12, "{:?}", out[0]);
+        assert!(
+            (out[1] - Vec3::new(0.015, 0.005, 0.6)).norm() < 1e-12,
+            "{:?}",
+            out[1]
+        );
+        assert!(
+            (out[0] - Vec3::new(0.015, 0.015, 0.6)).norm() < 1e-12,
+            "{:?}",
+            out[0]
+        );
         // The tail: drawn back in along its line to 1 cm steps.
         assert!((out[8].x - 0.08).abs() < 1e-12 && (out[9].x - 0.09).abs() < 1e-12);
     }
@@ -504,7 +512,10 @@ mod tests {
         assert_eq!(f(6, 0), None);
         assert_eq!(f(usize::MAX, 1), None);
         assert!(f(2, 2).is_some());
-        assert_eq!(resample_with_end_runs_at_rest(&nodes, 1, 0, 6, f64::NAN, &even), None);
+        assert_eq!(
+            resample_with_end_runs_at_rest(&nodes, 1, 0, 6, f64::NAN, &even),
+            None
+        );
     }
 
     #[test]
