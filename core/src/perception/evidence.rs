@@ -255,6 +255,15 @@ mod tests {
         let e = t.evidence(&f, &rect, 0.05);
         let hides = |u: f64| e.hides_rope_at(&t.at(u, 20.0, 0.59));
         assert!(hides(10.0) && hides(62.0));
+        // Just past the last column, in the row above a surface at the next
+        // row's first column: outside the image, so nothing hides it.
+        let mut edge = Table::new(80, 40, 40.0, 600);
+        edge.depth[20 * 80] = 500;
+        let ef = edge.frame();
+        let ee = edge.evidence(&ef, &[], 0.05);
+        assert!(ee.hides_rope_at(&edge.at(0.0, 20.0, 0.59)));
+        assert!(!ee.hides_rope_at(&edge.at(80.0, 19.0, 0.59)));
+        assert!(ee.shows_rope_at(&edge.at(80.0, 19.0, 0.59)));
         // Beside the occluder (its window would see it), the noise, no
         // depth, rope colour, free table, outside the image, behind the camera.
         for u in [11.0, 30.0, 12.0, 46.0, 45.0, 200.0, -3.0] {

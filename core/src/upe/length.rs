@@ -512,10 +512,19 @@ mod tests {
         assert_eq!(f(6, 0), None);
         assert_eq!(f(usize::MAX, 1), None);
         assert!(f(2, 2).is_some());
+        // Fewer nodes than the runs and a middle need: nothing to spread.
         assert_eq!(
-            resample_with_end_runs_at_rest(&nodes, 1, 0, 6, f64::NAN, &even),
+            resample_with_end_runs_at_rest(&nodes[..3], 1, 1, 6, 0.01, &even),
             None
         );
+        // A rest spacing that is not a positive length.
+        for bad in [f64::NAN, 0.0, -0.01, f64::INFINITY] {
+            assert_eq!(
+                resample_with_end_runs_at_rest(&nodes, 1, 0, 6, bad, &even),
+                None,
+                "{bad}"
+            );
+        }
     }
 
     #[test]

@@ -322,7 +322,7 @@ fn run_step(
     let m = input.previous.len();
     let head = input.visible.iter().take_while(|v| !**v).count();
     let tail = input.visible.iter().rev().take_while(|v| !**v).count();
-    let keep_ends = settings.keep_end_run_spacing && head < m;
+    let keep_ends = settings.keep_end_run_spacing;
     let extension = match (
         input.rest_length,
         &input.evidence,
@@ -352,9 +352,11 @@ fn run_step(
     };
     let kept = match (input.rest_length, keep_ends) {
         // No extension was added at a hidden end, so the hidden runs are
-        // still the first `head` and last `tail` points.
-        (Some(l), true) if m >= 2 => {
-            resample_with_end_runs_at_rest(&nodes, head, tail, m, l / (m - 1) as f64, &resample)
+        // still the first `head` and last `tail` points. (Fewer than two
+        // nodes: no middle to spread, `None`.)
+        (Some(l), true) => {
+            let spacing = l / m.saturating_sub(1) as f64;
+            resample_with_end_runs_at_rest(&nodes, head, tail, m, spacing, &resample)
         }
         _ => None,
     };
@@ -497,5 +499,85 @@ mod tests {
         assert!(kept.nodes[3..]
             .iter()
             .any(|n| !evidence.sight(n).allows_hidden()));
+    }
+
+    /// A table at 0.6 m (64x48 px, focal 60) and eight nodes 4 px apart
+    /// along row 24 at 0.59 m, columns 14-42, known to be 9 spacings long
+    /// (two short); the cloud on the visible nodes. Rope pixels over `rope`
+    /// columns, a surface at 0.5 m over `front` columns.
+    fn short_rope_step(
+        rope: core::ops::Range<usize>,
+        front: core::ops::Range<usize>,
+        visible: &[bool],
+        p: &UpeTrackParams,
+    ) -> ExtensionReport {
+        use crate::perception::evidence::fixture::Table;
+        let mut table = Table::new(64, 48, 60.0, 600);
+        for y in 22..27 {
+            for x in rope.clone() {
+                table.mask.data[y * 64 + x] = true;
+            }
+            for x in front.clone() {
+                table.depth[y * 64 + x] = 500;
+            }
+        }
+        let frame = table.frame();
+        let evidence = table.evidence(&frame, &[], 0.0075);
+        let at = |u: f64| table.at(u, 24.0, 0.59);
+        let previous: Vec<Vec3> = (0..8).map(|i| at(14.0 + 4.0 * i as f64)).collect();
+        let seen = |u: f64| visible[((u - 14.0) / 4.0).round().clamp(0.0, 7.0) as usize];
+        let cloud: Vec<Vec3> = (0..=140)
+            .map(|k| 14.0 + k as f64 * 0.2)
+            .filter(|&u| seen(u))
+            .map(at)
+            .collect();
+        let spacing = (previous[1] - previous[0]).norm();
+        let input = StepInput {
+            previous: &previous,
+            cloud: &cloud,
+            visible,
+            partly_seen: &[],
+            camera: &table.camera,
+            evidence: Some(evidence),
+            rest_length: Some(9.0 * spacing),
+        };
+        UpeTrackStep.step(&input, p).report.extension
+    }
+
+    #[test]
+    fn the_step_gives_length_back_at_visible_ends_and_under_occluders_when_asked() {
+        let p = UpeTrackParams::default();
+        let spread = UpeTrackParams {
+            keep_end_run_spacing: false,
+            ..p
+        };
+        let open = UpeTrackParams {
+            extend_under_occluders: false,
+            ..p
+        };
+        // Rope pixels all along: a hidden end keeps its length by its
+        // spacing and is not extended; spread with the rest, it is.
+        let mut head_hidden = [true; 8];
+        head_hidden[..2].fill(false);
+        let r = short_rope_step(0..64, 0..0, &head_hidden, &p);
+        assert!(r.head == 0.0 && r.tail > 0.0, "{r:?}");
+        assert!(short_rope_step(0..64, 0..0, &head_hidden, &spread).head > 0.0);
+        let mut tail_hidden = [true; 8];
+        tail_hidden[6..].fill(false);
+        let r = short_rope_step(0..64, 0..0, &tail_hidden, &p);
+        assert!(r.tail == 0.0 && r.head > 0.0, "{r:?}");
+        assert!(short_rope_step(0..64, 0..0, &tail_hidden, &spread).tail > 0.0);
+        // Rope pixels a little past the nodes, then free table before the
+        // head and something in front past the tail. EM draws the end nodes
+        // in, so both ends take back what lies over rope pixels; only the
+        // tail goes on under the occluder, and only when asked.
+        let all = [true; 8];
+        let under = short_rope_step(12..45, 45..64, &all, &p);
+        let not = short_rope_step(12..45, 45..64, &all, &open);
+        assert!(
+            not.tail > 0.0 && under.tail > not.tail + 0.01,
+            "{under:?} {not:?}"
+        );
+        assert_eq!(under.head, not.head);
     }
 }
