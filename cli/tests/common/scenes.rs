@@ -42,7 +42,7 @@ pub fn hidden_length_errors(
 ) -> Vec<f64> {
     let mut errors = Vec::new();
     each_frame(kind, variant, frames, params, |f, out, _| {
-        let truth: f64 = f.groundtruth.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
+        let truth = upetrack::upe::resampling::polyline_length(&f.groundtruth);
         errors.extend(upetrack_io::eval::hidden_length_error(
             &out.nodes,
             &out.visible,

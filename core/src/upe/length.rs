@@ -8,6 +8,7 @@
 
 use alloc::vec::Vec;
 
+use super::resampling::polyline_length;
 use super::slide::hidden_runs;
 use crate::math::{self, Vec3};
 
@@ -18,10 +19,6 @@ pub struct LengthReport {
     pub runs: usize,
     /// Largest relative change of a run's length (0.1: 10 %).
     pub largest_change: f64,
-}
-
-fn length(points: &[Vec3]) -> f64 {
-    points.windows(2).map(|w| math::norm(&(w[1] - w[0]))).sum()
 }
 
 /// `count` points after `curve[0]` evenly spaced by `step` along `curve`,
@@ -72,7 +69,7 @@ pub fn conserve_end_lengths(nodes: &mut [Vec3], known: &[bool], rest_length: f64
     if from > to {
         return report;
     }
-    let budget = rest_length - length(&nodes[from..=to]);
+    let budget = rest_length - polyline_length(&nodes[from..=to]);
     let ends: Vec<(usize, bool)> = [
         // A head run starts at node 0: its node count is its end.
         head.map(|r| (r.end, true)),
@@ -93,7 +90,7 @@ pub fn conserve_end_lengths(nodes: &mut [Vec3], known: &[bool], rest_length: f64
         } else {
             nodes[m - 1 - count..].to_vec()
         };
-        let old = length(&curve);
+        let old = polyline_length(&curve);
         if old <= share {
             continue;
         }
@@ -220,7 +217,7 @@ pub fn extend_short_ends(
         return (nodes.to_vec(), report);
     }
     let spacing = rest_length / (m - 1) as f64;
-    let shortfall = rest_length - length(nodes);
+    let shortfall = rest_length - polyline_length(nodes);
     if !(shortfall > MIN_SHORTFALL_SPACINGS * spacing) {
         return (nodes.to_vec(), report);
     }
@@ -312,7 +309,7 @@ mod tests {
         let known: Vec<bool> = (0..10).map(|i| i < 7).collect();
         let r = conserve_end_lengths(&mut nodes, &known, 0.09);
         assert_eq!(r.runs, 1);
-        assert!((length(&nodes) - 0.09).abs() < 1e-12);
+        assert!((polyline_length(&nodes) - 0.09).abs() < 1e-12);
         for (i, p) in nodes.iter().enumerate() {
             assert!((p.x - i as f64 * 0.01).abs() < 1e-12, "node {i}: {p:?}");
         }
@@ -328,7 +325,7 @@ mod tests {
         let known: Vec<bool> = (0..10).map(|i| i > 2).collect();
         let r = conserve_end_lengths(&mut nodes, &known, 0.09);
         assert_eq!(r.runs, 1);
-        assert!((length(&nodes) - 0.09).abs() < 1e-12);
+        assert!((polyline_length(&nodes) - 0.09).abs() < 1e-12);
         // Even spacing of 1 cm along the bent curve from the anchor (x = 3 cm).
         assert!((nodes[2] - Vec3::new(0.02, 0.0, 0.6)).norm() < 1e-12);
         assert!((nodes[1] - Vec3::new(0.01, 0.0, 0.6)).norm() < 1e-12);
@@ -434,7 +431,7 @@ mod tests {
         // Anything allowed: 1.5 cm at each end.
         let (out, r) = extend_short_ends(&nodes, 0.12, OpenEnds::BOTH, &|_| true);
         assert!((r.head - 0.015).abs() < 1e-12 && (r.tail - 0.015).abs() < 1e-12);
-        assert!((length(&out) - 0.12).abs() < 1e-12);
+        assert!((polyline_length(&out) - 0.12).abs() < 1e-12);
         assert_eq!(out.len(), 12);
         assert!((out[0] - Vec3::new(-0.015, 0.0, 0.6)).norm() < 1e-12);
         // Free space beyond the head (x < 0): the tail takes it all.

@@ -320,8 +320,7 @@ fn run_step(
         _ => FreeSpaceReport::default(),
     };
     let m = input.previous.len();
-    let head = input.visible.iter().take_while(|v| !**v).count();
-    let tail = input.visible.iter().rev().take_while(|v| !**v).count();
+    let slide::HiddenEnds { head, tail } = slide::HiddenEnds::of(input.visible);
     let keep_ends = settings.keep_end_run_spacing;
     let extension = match (
         input.rest_length,

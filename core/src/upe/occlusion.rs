@@ -9,7 +9,7 @@
 
 use alloc::vec::Vec;
 
-use super::slide::slide_estimates;
+use super::slide::{slide_estimates, HiddenEnds};
 use crate::math::{self, Vec3};
 
 /// The UPE coefficients (paper symbols in brackets).
@@ -190,8 +190,7 @@ pub const MIN_END_RUN: usize = 2;
 pub fn hidden_end_runs(known: &[bool]) -> Vec<bool> {
     let n = known.len();
     let mut out = alloc::vec![false; n];
-    let head = known.iter().take_while(|&&k| !k).count();
-    let tail = known.iter().rev().take_while(|&&k| !k).count();
+    let HiddenEnds { head, tail } = HiddenEnds::of(known);
     if head >= MIN_END_RUN {
         out[..head].iter_mut().for_each(|v| *v = true);
     }
@@ -313,8 +312,7 @@ pub fn estimate_hidden_with_sweeps(
             let n = nodes.len();
             let mut est = slide_estimates(nodes, known, prev, c.displacement_decay);
             // Keep only the runs that reach an end of the rope.
-            let head = known.iter().take_while(|&&k| !k).count();
-            let tail = known.iter().rev().take_while(|&&k| !k).count();
+            let HiddenEnds { head, tail } = HiddenEnds::of(known);
             for (m, e) in est.iter_mut().enumerate() {
                 if m >= head && m + tail < n {
                     *e = None;

@@ -40,6 +40,27 @@ pub fn hidden_runs(known: &[bool]) -> Vec<HiddenRun> {
     out
 }
 
+/// How many nodes are hidden at each end of the rope: the leading and the
+/// trailing `false` of `known` (both `known.len()` when every node is
+/// hidden).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct HiddenEnds {
+    /// Hidden nodes from node 0 on.
+    pub head: usize,
+    /// Hidden nodes up to node `M - 1`.
+    pub tail: usize,
+}
+
+impl HiddenEnds {
+    /// The hidden ends of `known`.
+    pub fn of(known: &[bool]) -> Self {
+        Self {
+            head: known.iter().take_while(|&&k| !k).count(),
+            tail: known.iter().rev().take_while(|&&k| !k).count(),
+        }
+    }
+}
+
 /// Nodes of visible rope behind an anchor that the sliding curve may
 /// borrow when a run is pulled out past its anchor.
 const BORROWED_NODES: usize = 3;
