@@ -5,7 +5,10 @@ For every crate under the given directories (default: the workspace's), each
 source file is a module; an edge a -> b is any path from `a` into `b`
 (`use crate::b::..`, `super::b`, or an inline `crate::b::x`), tests at the end
 of a file excluded. A parent declaring its children (`mod b;`) is not an
-edge, using them is. Prints every cycle found and exits 1 if there is one.
+edge, using them is. The same is asked of the crate's top-level modules
+(each folder taken whole: `perception/` -> `upe/` -> `step` -> `perception/`
+is a cycle even when no two files import each other), so that shared stages
+stay below the algorithms. Prints every cycle found and exits 1 if there is one.
 
     python3 scripts/module_cycles.py [crate_dir ...]
 """
@@ -145,12 +148,18 @@ def main(dirs):
             with open(path, encoding="utf-8") as f:
                 graph[mod] = edges_of(mod, f.read(), mods)
         found = cycles(graph)
+        # Folders taken whole: the first segment of each module path.
+        top = {}
+        for mod, targets in graph.items():
+            if mod:
+                top.setdefault(mod[:1], set()).update(t[:1] for t in targets if t and t[:1] != mod[:1])
+        found = [(c, graph) for c in found] + [(c, top) for c in cycles(top) if c not in found]
         name = lambda m: "::".join(m) or "(root)"
-        for comp in found:
+        for comp, g in found:
             bad += 1
             print(f"{d}: module cycle: {' <-> '.join(name(m) for m in comp)}")
             for m in comp:
-                deps = sorted(name(t) for t in graph[m] if t in comp)
+                deps = sorted(name(t) for t in g[m] if t in comp)
                 print(f"    {name(m)} -> {', '.join(deps)}")
         if not found:
             print(f"{d}: {len(mods)} modules, no cycle")

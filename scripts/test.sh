@@ -12,11 +12,13 @@ done
 
 echo "== cargo fmt --check"
 cargo fmt --all -- --check
-echo "== no module cycles (scripts/module_cycles.py; the fixture must fail)"
+echo "== no module cycles (scripts/module_cycles.py; the fixtures must fail)"
 python3 scripts/module_cycles.py
-if python3 scripts/module_cycles.py tests/data/module-cycle >/dev/null; then
-  echo "module_cycles.py missed the fixture's cycle"; exit 1
-fi
+for fixture in module-cycle folder-cycle; do
+  if python3 scripts/module_cycles.py "tests/data/$fixture" >/dev/null; then
+    echo "module_cycles.py missed the cycle of tests/data/$fixture"; exit 1
+  fi
+done
 echo "== file sizes (scripts/file_sizes.py)"
 python3 scripts/file_sizes.py
 echo "== clippy -D warnings"

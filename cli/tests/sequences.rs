@@ -35,7 +35,7 @@ fn written_sequence_loads_and_matches_its_ground_truth() {
         let mask = segment(&frame, &seq.hsv, &[]);
         let gt = seq.groundtruth[i].as_ref().expect("ground truth");
         // The rope's length is kept by the simulation within 2 %.
-        let len = upetrack::upe::resampling::polyline_length(gt);
+        let len = upetrack::polyline::polyline_length(gt);
         assert!((len - 0.8).abs() < 0.016, "rope length {len}");
         let mut on_rope = 0;
         let mut depth_err = Vec::new();
@@ -498,7 +498,7 @@ fn a_jumped_rope_re_initialises_when_few_nodes_stay_visible() {
         let mut t = Tracker::new(p, s.camera(), s.hsv()).expect("tracker");
         assert!(!t.process(&a, &[]).expect("a").is_lost());
         let obs = t.observe(&b, &[]).expect("observe");
-        let visible = upetrack::upe::visibility::visible_nodes_relative(
+        let visible = upetrack::visibility::visible_nodes_relative(
             t.nodes(),
             &obs.cloud,
             p.visibility_radius,

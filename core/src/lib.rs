@@ -9,8 +9,10 @@
 //!    rectangles), [`perception::point_cloud`] (deprojection, voxel grid,
 //!    pushed to the rope's axis) and [`perception::initialisation`] (the
 //!    ordered centre line and `M` nodes when there is no state).
-//! 2. [`upe`], UPETrack's own step: [`upe::visibility`] (`q >= V_lim`
-//!    within `r_vis`), [`upe::registration`] (GMM-EM of the visible nodes,
+//!    Below them, shared by every stage: [`math`], [`polyline`] (arc
+//!    length, even spacing by arc length) and [`visibility`] (`q >= V_lim`
+//!    within `r_vis`, the shared loss test).
+//! 2. [`upe`], UPETrack's own step: [`upe::registration`] (GMM-EM of the visible nodes,
 //!    Eq. 1-5), [`upe::occlusion`] (Unidirectional Position Estimation of
 //!    the hidden nodes, Eq. 6-11) and [`upe::resampling`] (Eq. 12-15).
 //! 3. [`baselines`], the other tracking steps on the same pipeline:
@@ -49,11 +51,13 @@ pub mod math;
 pub mod metrics;
 pub mod params;
 pub mod perception;
+pub mod polyline;
 pub mod rng;
 pub mod step;
 pub mod tracker;
 pub mod upe;
 pub mod validation;
+pub mod visibility;
 
 pub use math::Vec3;
 pub use params::Params;

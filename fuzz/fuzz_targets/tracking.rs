@@ -23,11 +23,11 @@ fuzz_target!(|data: &[u8]| {
     let (prev, cloud) = points.split_at(m);
     let finite = points.iter().all(|p| p.iter().all(|c| c.is_finite()));
     let p = Params::default();
-    let visible = upetrack::upe::visibility::visible_nodes(prev, cloud, p.visibility_radius, 3);
+    let visible = upetrack::visibility::visible_nodes(prev, cloud, p.visibility_radius, 3);
     let mut nodes = prev.to_vec();
     upetrack::upe::registration::register(cloud, &mut nodes, &visible, &p.upetrack.em());
     upetrack::upe::occlusion::estimate_hidden(&mut nodes, &visible, prev, &p.upetrack.upe());
-    let out = upetrack::upe::resampling::resample_uniform(&nodes, m);
+    let out = upetrack::polyline::resample_uniform(&nodes, m);
     assert_eq!(out.len(), m);
     if finite && out.iter().all(|q| q.iter().all(|c| c.abs() < 1e300)) {
         // Finite in, finite out (unless magnitudes overflow on the way).

@@ -199,7 +199,7 @@ pub fn summarise(
         .filter(|f| !f.lost)
         .filter_map(|f| {
             let gt = truth.get(f.frame)?.as_ref()?;
-            let true_length = upetrack::upe::resampling::polyline_length(gt);
+            let true_length = upetrack::polyline::polyline_length(gt);
             let nodes: Vec<Vec3> = f
                 .nodes
                 .iter()

@@ -7,7 +7,7 @@ use alloc::vec;
 use alloc::vec::Vec;
 
 use upetrack::math::{self, Vec3};
-use upetrack::upe::resampling::resample_uniform;
+use upetrack::polyline::resample_uniform;
 
 /// Physical settings of a rope.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -75,7 +75,7 @@ impl Rope {
         // curve) has the rope's length.
         let mut x = resample_uniform(&dense, n);
         for _ in 0..4 {
-            let len = upetrack::upe::resampling::polyline_length(&x).max(1e-9);
+            let len = upetrack::polyline::polyline_length(&x).max(1e-9);
             let s = settings.length / len;
             for p in dense.iter_mut() {
                 *p = c + (*p - c) * s;
@@ -114,7 +114,7 @@ impl Rope {
 
     /// Current length of the particle chain, metres.
     pub fn current_length(&self) -> f64 {
-        upetrack::upe::resampling::polyline_length(&self.x)
+        upetrack::polyline::polyline_length(&self.x)
     }
 
     fn solve_distance(

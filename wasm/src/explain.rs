@@ -54,7 +54,7 @@ struct ExplainView {
 }
 
 fn length_mm(nodes: &[Vec3]) -> f64 {
-    1000.0 * upetrack::upe::resampling::polyline_length(nodes)
+    1000.0 * upetrack::polyline::polyline_length(nodes)
 }
 
 fn optional_px(camera: &CameraIntrinsics, points: &[Option<Vec3>]) -> Vec<f32> {

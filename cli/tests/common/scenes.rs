@@ -42,7 +42,7 @@ pub fn hidden_length_errors(
 ) -> Vec<f64> {
     let mut errors = Vec::new();
     each_frame(kind, variant, frames, params, |f, out, _| {
-        let truth = upetrack::upe::resampling::polyline_length(&f.groundtruth);
+        let truth = upetrack::polyline::polyline_length(&f.groundtruth);
         errors.extend(upetrack_io::eval::hidden_length_error(
             &out.nodes,
             &out.visible,

@@ -12,7 +12,7 @@ use super::frame::Frame;
 use super::point_cloud::{depth_at, push_along_rays, CloudSettings, SURFACE_TO_AXIS_RATIO};
 use super::segmentation::Mask;
 use crate::math::{Vec2, Vec3};
-use crate::upe::resampling::{polyline_length, resample_uniform};
+use crate::polyline::{polyline_length, resample_uniform};
 
 /// Fewest pixels on a centre line worth initialising from.
 pub const MIN_CENTRE_LINE_PIXELS: usize = 8;

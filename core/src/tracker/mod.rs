@@ -14,13 +14,13 @@ use crate::perception::frame::{Frame, FrameError};
 use crate::perception::initialisation::{initialise, InitError};
 use crate::perception::point_cloud::build_cloud;
 use crate::perception::segmentation::{segment, HsvRange, Mask, Rect, SegmentationError};
+use crate::polyline::{polyline_length, resample_uniform};
 use crate::step::{Algorithm, StepInput};
 use crate::upe::explain::StepExplanation;
 use crate::upe::occlusion::UpeReport;
 use crate::upe::registration::EmReport;
-use crate::upe::resampling::{polyline_length, resample_uniform};
-use crate::upe::visibility::{classify_nodes, visible_nodes_relative, NodeVisibility};
 use crate::upe::UpeTrackStep;
+use crate::visibility::{classify_nodes, visible_nodes_relative, NodeVisibility};
 
 mod stepper;
 pub use stepper::{StepReports, Stepper};

@@ -8,9 +8,9 @@
 
 use alloc::vec::Vec;
 
-use super::resampling::polyline_length;
 use super::slide::hidden_runs;
 use crate::math::{self, Vec3};
+use crate::polyline::polyline_length;
 
 /// What the stage did in one frame.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -464,7 +464,7 @@ mod tests {
 
     /// Polyline resampling for the tests (nodes spread evenly).
     fn even(points: &[Vec3], count: usize) -> Vec<Vec3> {
-        crate::upe::resampling::resample_uniform(points, count)
+        crate::polyline::resample_uniform(points, count)
     }
 
     #[test]

@@ -1,5 +1,6 @@
 //! UPETrack's own per-frame step, one module per stage in the paper's order:
-//! [`visibility`] (Fig. 3), [`registration`] (GMM-EM of the visible nodes,
+//! [`registration`] (GMM-EM of the visible nodes, after the shared
+//! [`crate::visibility`] test of Fig. 3),
 //! Eq. 1-5), [`occlusion`] (Unidirectional Position Estimation of the hidden
 //! nodes, Eq. 6-11) and [`resampling`] (Eq. 12-15). [`UpeTrackParams`] holds
 //! the step's parameters; [`UpeTrackStep`] runs the stages.
@@ -11,7 +12,6 @@ pub mod occlusion;
 pub mod registration;
 pub mod resampling;
 pub mod slide;
-pub mod visibility;
 
 use free_space::{clear_free_space, FreeSpaceReport};
 use length::{
@@ -20,7 +20,9 @@ use length::{
 };
 use occlusion::{estimate_hidden_with_sweeps, HiddenMotion, UpeCoefficients, UpeReport};
 use registration::{register_observed, EmReport, EmSettings, MAX_EM_ITERATIONS};
-use resampling::{resample_smooth, resample_uniform};
+use resampling::resample_smooth;
+
+use crate::polyline::resample_uniform;
 
 use alloc::vec::Vec;
 

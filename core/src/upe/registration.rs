@@ -6,8 +6,8 @@
 use alloc::vec;
 use alloc::vec::Vec;
 
-use super::resampling::polyline_length;
 use crate::math::{self, Vec3};
+use crate::polyline::polyline_length;
 
 /// Most EM iterations accepted per frame.
 pub const MAX_EM_ITERATIONS: u32 = 1000;

@@ -1,5 +1,7 @@
-//! Node visibility (Fig. 3): a node is visible when at least `V_lim` points
-//! of the current cloud lie within `r_vis` of its previous position.
+//! Node visibility (the paper's Fig. 3): a node is visible when at least
+//! `V_lim` points of the current cloud lie within `r_vis` of its previous
+//! position. Every algorithm shares it: the tracker's loss test, and the
+//! hidden nodes UPETrack's step estimates.
 
 use alloc::vec::Vec;
 

@@ -1,0 +1,1 @@
+use crate::y::b::B;

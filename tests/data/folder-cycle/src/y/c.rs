@@ -1,0 +1,1 @@
+use crate::x::d::D;
