@@ -6,12 +6,14 @@ use alloc::vec;
 use alloc::vec::Vec;
 
 use crate::baselines::trackdlo::TrackDloReport;
-use crate::math::Vec3;
+use crate::math::{Vec2, Vec3};
 use crate::params::{Params, ParamsError};
 use crate::perception::camera::{CameraError, CameraIntrinsics};
 use crate::perception::evidence::Evidence;
 use crate::perception::frame::{Frame, FrameError};
-use crate::perception::initialisation::{initialise, InitError};
+use crate::perception::initialisation::{
+    initialise, InitError, InitGuide, InitReport, PriorError, RopePrior,
+};
 use crate::perception::point_cloud::build_cloud;
 use crate::perception::segmentation::{segment, HsvRange, Mask, Rect, SegmentationError};
 use crate::polyline::{polyline_length, resample_uniform};
@@ -56,6 +58,9 @@ pub enum TrackerError {
     /// A frame that does not fit the camera.
     #[error(transparent)]
     Frame(#[from] FrameError),
+    /// An invalid rope prior.
+    #[error(transparent)]
+    Prior(#[from] PriorError),
 }
 
 /// Why a frame produced no tracked nodes.
@@ -110,6 +115,9 @@ pub struct FrameOutput {
     pub upe: Option<UpeReport>,
     /// What TrackDLO did (TrackDLO's tracked frames only).
     pub trackdlo: Option<TrackDloReport>,
+    /// What initialisation found and why it took what it took (frames
+    /// initialised or recovered only).
+    pub init: Option<InitReport>,
 }
 
 impl FrameOutput {
@@ -173,6 +181,10 @@ pub struct Tracker {
     refused_jump_cloud: Option<usize>,
     /// The per-frame step of `params.algorithm`.
     stepper: Stepper,
+    /// What the user knows of the rope.
+    prior: RopePrior,
+    /// A pixel on the rope the user clicked, for the next initialisation.
+    hint: Option<Vec2>,
 }
 
 impl Tracker {
@@ -195,7 +207,33 @@ impl Tracker {
             rest_length: None,
             refused_jump_cloud: None,
             stepper: Stepper::new(params.algorithm),
+            prior: RopePrior::default(),
+            hint: None,
         })
+    }
+
+    /// What the user knows of the rope (`dlo.json`'s `rope`): candidates
+    /// are judged against it, its diameter is the radius in force and its
+    /// length the one a re-initialisation must find. Takes effect at the
+    /// next initialisation.
+    pub fn set_rope_prior(&mut self, prior: RopePrior) -> Result<(), TrackerError> {
+        prior.validate()?;
+        self.prior = prior;
+        Ok(())
+    }
+
+    /// The rope prior in force.
+    pub fn rope_prior(&self) -> &RopePrior {
+        &self.prior
+    }
+
+    /// A pixel `(u, v)` on the rope the user clicked: initialisations take
+    /// the rope-shaped candidate through it (`None` forgets it). Call
+    /// [`Tracker::reset`] to initialise again from the next frame.
+    pub fn set_rope_hint(&mut self, hint: Option<[f64; 2]>) {
+        self.hint = hint
+            .filter(|h| h.iter().all(|c| c.is_finite()))
+            .map(|[u, v]| Vec2::new(u, v));
     }
 
     /// The parameters in force.
@@ -320,9 +358,13 @@ impl Tracker {
         build_cloud(frame, mask, &self.camera, &self.cloud_settings())
     }
 
-    /// The rope's radius in force, metres: measured at the first
-    /// initialisation (`Params::estimate_radius`) or `Params::dlo_radius`.
+    /// The rope's radius in force, metres: half the prior's diameter when
+    /// known, else measured at the first initialisation
+    /// (`Params::estimate_radius`) or `Params::dlo_radius`.
     pub fn radius(&self) -> f64 {
+        if let Some(d) = self.prior.diameter {
+            return 0.5 * d;
+        }
         match (self.params.estimate_radius, self.known_radius) {
             (true, Some(r)) if self.params.dlo_radius > 0.0 => r,
             _ => self.params.dlo_radius,
@@ -388,6 +430,7 @@ impl Tracker {
             em: out.report.em,
             upe: out.report.upe,
             trackdlo: out.report.trackdlo,
+            init: None,
         }
     }
 
@@ -469,16 +512,30 @@ impl Tracker {
         frame: &Frame<'_>,
         obs: &Observation,
     ) -> Result<FrameOutput, ReinitFailure> {
-        let init = initialise(frame, &obs.mask, &self.camera, &self.params.init())
+        // After a loss, the candidate nearest the last known state, among
+        // those long enough to be taken.
+        let known = self.known_length.or(self.prior.length);
+        let previous = match &self.state {
+            Some(s) => s.nodes.as_slice(),
+            None => &[],
+        };
+        let guide = InitGuide {
+            prior: self.prior,
+            hint: self.hint,
+            previous,
+            min_length: known.map_or(0.0, |k| self.params.reinit_length_fraction * k),
+        };
+        let init = initialise(frame, &obs.mask, &self.camera, &self.params.init(), &guide)
             .map_err(ReinitFailure::Init)?;
-        if let Some(known) = self.known_length {
+        if let Some(known) = known {
             if init.length < self.params.reinit_length_fraction * known {
                 return Err(ReinitFailure::Short {
                     found: init.length,
                     known,
                 });
             }
-        } else {
+        }
+        if self.known_length.is_none() {
             self.known_length = Some(init.length);
             self.known_radius = init.radius;
             self.rest_length = Some(crate::upe::length::rest_length(
@@ -507,6 +564,7 @@ impl Tracker {
             em: None,
             upe: None,
             trackdlo: None,
+            init: Some(init.report),
         })
     }
 
@@ -538,6 +596,7 @@ impl Tracker {
             em: None,
             upe: None,
             trackdlo: None,
+            init: None,
         }
     }
 

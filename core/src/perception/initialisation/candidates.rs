@@ -1,0 +1,634 @@
+//! Rope-shaped evidence: each shape's walks cut where the width or the
+//! depth jumps, each piece tested as a rope would be (thin, of even width,
+//! long, smooth), and the pieces that pass joined end to end into the
+//! candidates for the whole rope.
+
+use alloc::vec;
+use alloc::vec::Vec;
+
+use super::graph::{angle, hermite, SkeletonGraph};
+use super::lift::{depths_along, line_through, resolve_crossings, NO_ZONE};
+use super::skeleton::{Grid, Shape};
+use super::{NotRope, SetAside};
+use crate::math::{Vec2, Vec3};
+use crate::perception::camera::CameraIntrinsics;
+use crate::perception::frame::Frame;
+use crate::perception::point_cloud::CloudSettings;
+use crate::perception::segmentation::Mask;
+use crate::polyline::polyline_length;
+
+/// A point whose width exceeds this multiple of its walk's lower-quartile
+/// width (plus [`WIDTH_SLACK_PX`]) belongs to something thicker the rope
+/// touches (a phone, a hand): the walk is cut there.
+const THICK_RATIO: f64 = 2.0;
+/// Pixels of width a thin line's mask may gain or lose at its edges.
+const WIDTH_SLACK_PX: f64 = 1.5;
+/// A rope's width is even: this share of its points lie within
+/// [`EVEN_TOLERANCE`] of its median width (plus [`WIDTH_SLACK_PX`]).
+pub const MIN_EVEN_SHARE: f64 = 0.75;
+/// Relative tolerance of the even-width test (perspective across a tilted
+/// view changes a rope's width by up to a third).
+const EVEN_TOLERANCE: f64 = 0.5;
+/// Shortest piece of rope worth joining, in its own widths (a stretch of
+/// rope between two patches of glare).
+pub const MIN_FRAGMENT_ELONGATION: f64 = 3.0;
+/// Shortest rope, in its own widths: a rope is at least ten times longer
+/// than it is thick (a finger is four or five).
+pub const MIN_ROPE_ELONGATION: f64 = 10.0;
+/// Sharpest turn between chords one width long, degrees: a rope folded
+/// flat turns through 115 degrees over its width, no more.
+pub const MAX_TURN_PER_WIDTH_DEGREES: f64 = 120.0;
+/// Thinnest and thickest rope without a prior, metres.
+pub const ROPE_DIAMETER_RANGE: (f64, f64) = (0.001, 0.1);
+/// A prior diameter `d` accepts widths from `d / k` to `k d`: the mask of a
+/// thin rope loses or gains a pixel at each edge.
+pub const DIAMETER_PRIOR_FACTOR: f64 = 2.0;
+/// Largest angle, degrees, between a fragment's end direction and the gap
+/// to the next one for the two to be joined.
+pub const MAX_JOIN_ANGLE_DEGREES: f64 = 45.0;
+/// Widest gap joined regardless of the fragments' lengths, in rope diameters
+/// (an occluder a few widths across: a pen over a thin cable).
+pub const JOIN_GAP_DIAMETERS: f64 = 6.0;
+/// Widest gap joined, as a fraction of the shorter of the two fragments
+/// (a box over the middle of a rope).
+pub const JOIN_GAP_FRACTION: f64 = 0.5;
+/// Largest ratio of two fragments' diameters for them to be one rope.
+pub const JOIN_DIAMETER_RATIO: f64 = 1.6;
+/// Fewest points a piece must have to be measured at all.
+const MIN_PIECE_POINTS: usize = 4;
+/// Longest extension of a skeleton end towards its shape's tip, pixels.
+const MAX_END_EXTENSION: usize = 60;
+/// Pixels back from a skeleton end used for the direction of its extension.
+const END_DIRECTION_PIXELS: usize = 8;
+/// Depth noise of the D435i's stereo matching, as a disparity error in pixels.
+const SUBPIXEL_DISPARITY: f64 = 0.08;
+/// The D435i's stereo baseline, metres.
+const STEREO_BASELINE: f64 = 0.050;
+/// A change of depth between neighbouring points of a path larger than
+/// this many depth-noise deviations (plus [`DEPTH_JUMP_SLOPE`] times their
+/// distance across the view) is two things touching in the image.
+const DEPTH_JUMP_SIGMAS: f64 = 6.0;
+/// Steepest a rope rises between two points of a path, as depth per
+/// distance across the view (72 degrees).
+const DEPTH_JUMP_SLOPE: f64 = 3.0;
+
+/// What a piece is measured against: the frame's depth, or nothing (image only).
+#[derive(Clone, Copy)]
+pub(super) struct Metric<'a> {
+    pub frame: &'a Frame<'a>,
+    pub camera: &'a CameraIntrinsics,
+    pub cloud: &'a CloudSettings,
+}
+
+/// A stretch of one shape's skeleton measured as a rope.
+#[derive(Debug, Clone)]
+pub(super) struct Piece {
+    pub points: Vec<Vec2>,
+    pub widths: Vec<f64>,
+    pub zones: Vec<u32>,
+    /// Depth at each point (empty without depth).
+    pub depths: Vec<Option<f64>>,
+    /// Label of its shape.
+    pub label: u32,
+    /// Mask pixels it stands for (its shape's, when it is the shape's only piece).
+    pub pixels: f64,
+    /// Median width, pixels.
+    pub width_px: f64,
+    /// Length along the image, pixels.
+    pub length_px: f64,
+    /// The unpushed line through it (metres, or pixels with z = 0).
+    pub line: Vec<Vec3>,
+    /// Length, metres (pixels without depth).
+    pub length: f64,
+    /// Diameter, metres (pixels without depth).
+    pub diameter: f64,
+}
+
+/// The pieces of every shape that pass the rope test, and the shapes none
+/// of whose pieces did.
+pub(super) fn rope_pieces(
+    shapes: &[Shape],
+    labels: &[u32],
+    mask: &Mask,
+    metric: Option<Metric<'_>>,
+    diameter_prior: Option<f64>,
+) -> (Vec<Piece>, Vec<SetAside>) {
+    let mut kept = Vec::new();
+    let mut set_aside = Vec::new();
+    let mut zone_base = 0u32;
+    for shape in shapes {
+        let centre = shape.centre(mask.width);
+        let aside = |reason| SetAside {
+            pixels: shape.pixels.len(),
+            centre: [centre.x, centre.y],
+            reason,
+        };
+        let mut grid = Grid::around(&shape.pixels, mask.width);
+        grid.thin();
+        let graph = match SkeletonGraph::of(&grid) {
+            Ok(g) => g,
+            Err(e) => {
+                set_aside.push(aside(NotRope::Branched {
+                    junctions: e.junctions,
+                }));
+                continue;
+            }
+        };
+        let walks = graph.walks(&grid, zone_base);
+        zone_base = zone_base.saturating_add(graph.zones as u32);
+        let mut pieces = Vec::new();
+        for mut walk in walks {
+            for (end, free) in walk.free.into_iter().enumerate() {
+                if free {
+                    extend_end(&mut walk, end == 0, labels, mask.width, shape.label);
+                }
+            }
+            for (a, b) in thin_runs(&walk.widths) {
+                let mut run = Piece::empty(shape.label);
+                run.points = walk.points[a..b].to_vec();
+                run.widths = walk.widths[a..b].to_vec();
+                run.zones = walk.zones[a..b].to_vec();
+                if let Some(m) = metric {
+                    run.depths = depths_along(&run.points, m.frame, mask, m.cloud);
+                    pieces.extend(run.split_at_depth_jumps(m));
+                } else {
+                    pieces.push(run);
+                }
+            }
+        }
+        pieces.retain(|p| p.points.len() >= MIN_PIECE_POINTS);
+        let sole = pieces.len() == 1;
+        let mut failures = Vec::new();
+        let before = kept.len();
+        for mut p in pieces {
+            match p.measure(metric, diameter_prior) {
+                Ok(()) => {
+                    p.pixels = if sole {
+                        shape.pixels.len() as f64
+                    } else {
+                        p.width_px * p.length_px
+                    };
+                    kept.push(p);
+                }
+                Err(reason) => failures.push((p.length_px, reason)),
+            }
+        }
+        if kept.len() == before {
+            // Nothing of this shape is rope: its longest piece says why.
+            let reason = failures
+                .into_iter()
+                .max_by(|a, b| a.0.total_cmp(&b.0))
+                .map_or(NotRope::Compact, |f| f.1);
+            set_aside.push(aside(reason));
+        }
+    }
+    (kept, set_aside)
+}
+
+/// The runs `[a, b)` of a walk between points too thick to be its rope.
+fn thin_runs(widths: &[f64]) -> Vec<(usize, usize)> {
+    let mut known: Vec<f64> = widths.iter().copied().filter(|w| w.is_finite()).collect();
+    if known.is_empty() {
+        return vec![(0, widths.len())];
+    }
+    known.sort_unstable_by(f64::total_cmp);
+    let limit = THICK_RATIO * known[known.len() / 4] + WIDTH_SLACK_PX;
+    let mut runs = Vec::new();
+    let mut start = None;
+    for (k, w) in widths.iter().enumerate() {
+        let thick = *w > limit;
+        match (thick, start) {
+            (false, None) => start = Some(k),
+            (true, Some(a)) => {
+                runs.push((a, k));
+                start = None;
+            }
+            _ => {}
+        }
+    }
+    if let Some(a) = start {
+        runs.push((a, widths.len()));
+    }
+    runs
+}
+
+/// Continues a walk's end in its direction while its shape goes on (the
+/// skeleton stops about half a width short of a tip).
+fn extend_end(walk: &mut super::graph::Walk, head: bool, labels: &[u32], width: u32, label: u32) {
+    let n = walk.points.len();
+    if n < 2 {
+        return;
+    }
+    let back = END_DIRECTION_PIXELS.min(n - 1);
+    let (end, from) = if head {
+        (walk.points[0], walk.points[back])
+    } else {
+        (walk.points[n - 1], walk.points[n - 1 - back])
+    };
+    let dir = end - from;
+    let len = dir.norm();
+    if !(len > 1e-9) {
+        return;
+    }
+    let dir = dir / len;
+    let height = labels.len() / width.max(1) as usize;
+    let mut added = Vec::new();
+    for k in 1..=MAX_END_EXTENSION {
+        let p = end + dir * k as f64;
+        let (u, v) = (libm::round(p.x) as i64, libm::round(p.y) as i64);
+        let inside = u >= 0 && v >= 0 && (u as usize) < width as usize && (v as usize) < height;
+        if !inside || labels[v as usize * width as usize + u as usize] != label {
+            break;
+        }
+        added.push(p);
+    }
+    let k = added.len();
+    if head {
+        added.reverse();
+        walk.points.splice(0..0, added);
+        walk.widths.splice(0..0, vec![f64::NAN; k]);
+        walk.zones.splice(0..0, vec![NO_ZONE; k]);
+    } else {
+        walk.points.extend(added);
+        walk.widths.extend(vec![f64::NAN; k]);
+        walk.zones.extend(vec![NO_ZONE; k]);
+    }
+}
+
+/// One deviation of the D435i's depth at `z` metres for a focal length of
+/// `f` pixels: `z^2 e / (f b)` for a disparity error `e` and baseline `b`.
+pub(super) fn depth_noise(z: f64, f: f64) -> f64 {
+    z * z * SUBPIXEL_DISPARITY / (f * STEREO_BASELINE)
+}
+
+fn median(values: &mut [f64]) -> f64 {
+    if values.is_empty() {
+        return f64::NAN;
+    }
+    values.sort_unstable_by(f64::total_cmp);
+    values[values.len() / 2]
+}
+
+impl Piece {
+    fn empty(label: u32) -> Self {
+        Self {
+            points: Vec::new(),
+            widths: Vec::new(),
+            zones: Vec::new(),
+            depths: Vec::new(),
+            label,
+            pixels: 0.0,
+            width_px: f64::NAN,
+            length_px: 0.0,
+            line: Vec::new(),
+            length: 0.0,
+            diameter: f64::NAN,
+        }
+    }
+
+    /// The piece cut between neighbouring measured points (outside junction
+    /// zones) whose depths differ more than a rope can rise between them.
+    fn split_at_depth_jumps(self, m: Metric<'_>) -> Vec<Piece> {
+        let f = 0.5 * (m.camera.fx + m.camera.fy);
+        let mut cuts = Vec::new();
+        let mut last: Option<(usize, f64)> = None;
+        for (k, d) in self.depths.iter().enumerate() {
+            let (Some(z), true) = (*d, self.zones[k] == NO_ZONE) else {
+                continue;
+            };
+            if let Some((i, zi)) = last {
+                let across = (self.points[k] - self.points[i]).norm() * z / f;
+                let allowed = DEPTH_JUMP_SLOPE * across + DEPTH_JUMP_SIGMAS * depth_noise(z, f);
+                if (z - zi).abs() > allowed {
+                    cuts.push(k);
+                }
+            }
+            last = Some((k, z));
+        }
+        if cuts.is_empty() {
+            return vec![self];
+        }
+        let mut out = Vec::new();
+        let mut a = 0;
+        for b in cuts.into_iter().chain([self.points.len()]) {
+            let mut p = Piece::empty(self.label);
+            p.points = self.points[a..b].to_vec();
+            p.widths = self.widths[a..b].to_vec();
+            p.zones = self.zones[a..b].to_vec();
+            p.depths = self.depths[a..b].to_vec();
+            out.push(p);
+            a = b;
+        }
+        out
+    }
+
+    /// Measures the piece and tests it as a fragment of rope.
+    fn measure(
+        &mut self,
+        metric: Option<Metric<'_>>,
+        diameter_prior: Option<f64>,
+    ) -> Result<(), NotRope> {
+        let mut widths: Vec<f64> = self
+            .widths
+            .iter()
+            .copied()
+            .filter(|w| w.is_finite())
+            .collect();
+        let w = median(&mut widths);
+        if !(w > 0.0) {
+            return Err(NotRope::Compact);
+        }
+        self.width_px = w;
+        self.length_px = self.points.windows(2).map(|p| (p[1] - p[0]).norm()).sum();
+        match metric {
+            Some(m) => {
+                let mut depths = self.depths.clone();
+                resolve_crossings(&mut depths, &self.zones);
+                let mut z: Vec<f64> = depths.iter().flatten().copied().collect();
+                let z = median(&mut z);
+                self.line =
+                    line_through(&self.points, &depths, m.camera, 0.0).ok_or(NotRope::NoDepth)?;
+                self.diameter = w * z / (0.5 * (m.camera.fx + m.camera.fy));
+                let (lo, hi) = match diameter_prior {
+                    Some(d) => (d / DIAMETER_PRIOR_FACTOR, d * DIAMETER_PRIOR_FACTOR),
+                    None => ROPE_DIAMETER_RANGE,
+                };
+                if !(self.diameter >= lo && self.diameter <= hi) {
+                    return Err(NotRope::Diameter {
+                        diameter_mm: self.diameter * 1000.0,
+                        low_mm: lo * 1000.0,
+                        high_mm: hi * 1000.0,
+                    });
+                }
+            }
+            None => {
+                self.line = self
+                    .points
+                    .iter()
+                    .map(|p| Vec3::new(p.x, p.y, 0.0))
+                    .collect();
+                self.diameter = w;
+            }
+        }
+        self.length = polyline_length(&self.line);
+        let even = widths
+            .iter()
+            .filter(|&&x| (x - w).abs() <= EVEN_TOLERANCE * w + WIDTH_SLACK_PX)
+            .count() as f64
+            / widths.len() as f64;
+        if even < MIN_EVEN_SHARE {
+            return Err(NotRope::Uneven { even_share: even });
+        }
+        let elongation = self.length / self.diameter;
+        if !(elongation >= MIN_FRAGMENT_ELONGATION) {
+            return Err(NotRope::Short { elongation });
+        }
+        let turn = sharpest_turn(&self.points, w.max(2.0));
+        if turn > MAX_TURN_PER_WIDTH_DEGREES {
+            return Err(NotRope::Kinked { turn_degrees: turn });
+        }
+        Ok(())
+    }
+
+    /// Image position of an end and the direction out of the piece there,
+    /// over about two widths.
+    fn end(&self, head: bool) -> (Vec2, Vec2) {
+        let n = self.points.len();
+        let reach = (libm::round(2.0 * self.width_px) as usize)
+            .max(4)
+            .min(n / 2)
+            .max(1)
+            .min(n - 1);
+        if head {
+            (self.points[0], self.points[0] - self.points[reach])
+        } else {
+            (
+                self.points[n - 1],
+                self.points[n - 1] - self.points[n - 1 - reach],
+            )
+        }
+    }
+
+    fn end_3d(&self, head: bool) -> Vec3 {
+        if head {
+            self.line[0]
+        } else {
+            self.line[self.line.len() - 1]
+        }
+    }
+}
+
+/// The sharpest turn, degrees, between consecutive chords `step` pixels long.
+fn sharpest_turn(points: &[Vec2], step: f64) -> f64 {
+    let mut marks = Vec::new();
+    let mut last: Option<Vec2> = None;
+    for &p in points {
+        if last.is_none_or(|q| (p - q).norm() >= step) {
+            marks.push(p);
+            last = Some(p);
+        }
+    }
+    marks
+        .windows(3)
+        .map(|m| angle(m[1] - m[0], m[2] - m[1]).to_degrees())
+        .fold(0.0, f64::max)
+}
+
+/// Pieces joined end to end: one rope as far as the images tell.
+#[derive(Debug, Clone)]
+pub(super) struct Chain {
+    /// Image path, about a pixel between points.
+    pub points: Vec<Vec2>,
+    /// The junction zone of each point (`NO_ZONE` elsewhere).
+    pub zones: Vec<u32>,
+    /// Depth at each point (`None` in gaps; empty without depth).
+    pub depths: Vec<Option<f64>>,
+    /// Length, metres (pixels without depth), gaps included.
+    pub length: f64,
+    /// Diameter, metres (pixels without depth), length-weighted.
+    pub diameter: f64,
+    /// Mask pixels it stands for.
+    pub pixels: f64,
+    /// Pieces in it.
+    pub fragments: usize,
+    /// Junction zones it passes more than once (crossings with itself).
+    pub crossings: usize,
+    /// The unpushed line through its pieces (gaps not bridged), for distances.
+    pub line: Vec<Vec3>,
+}
+
+impl Chain {
+    /// Image length, pixels.
+    pub fn length_px(&self) -> f64 {
+        self.points.windows(2).map(|w| (w[1] - w[0]).norm()).sum()
+    }
+}
+
+/// A possible join of two piece ends.
+struct Link {
+    gap: f64,
+    a: (usize, bool),
+    b: (usize, bool),
+}
+
+/// Joins pieces end to end where their ends are close and point at each
+/// other, and the two are as thick, then lays each chain out as one path.
+pub(super) fn join(pieces: &[Piece], metric: bool) -> Vec<Chain> {
+    let n = pieces.len();
+    let mut links = Vec::new();
+    let limit = MAX_JOIN_ANGLE_DEGREES.to_radians();
+    for a in 0..n {
+        for b in a + 1..n {
+            let (pa, pb) = (&pieces[a], &pieces[b]);
+            let ratio = pa.diameter.max(pb.diameter) / pa.diameter.min(pb.diameter);
+            if !(ratio <= JOIN_DIAMETER_RATIO) {
+                continue;
+            }
+            let reach = (JOIN_GAP_DIAMETERS * pa.diameter.min(pb.diameter))
+                .max(JOIN_GAP_FRACTION * pa.length.min(pb.length));
+            for ha in [true, false] {
+                for hb in [true, false] {
+                    let gap = (pa.end_3d(ha) - pb.end_3d(hb)).norm();
+                    if !(gap <= reach) {
+                        continue;
+                    }
+                    let ((xa, oa), (xb, ob)) = (pa.end(ha), pb.end(hb));
+                    let g = xb - xa;
+                    if g.norm() >= 1.0 && (angle(oa, g) > limit || angle(ob, -g) > limit) {
+                        continue;
+                    }
+                    links.push(Link {
+                        gap,
+                        a: (a, ha),
+                        b: (b, hb),
+                    });
+                }
+            }
+        }
+    }
+    links.sort_by(|x, y| x.gap.total_cmp(&y.gap));
+    // Each end takes at most one link; no link closes a ring.
+    let mut next: Vec<[Option<(usize, bool)>; 2]> = vec![[None, None]; n];
+    let mut group: Vec<usize> = (0..n).collect();
+    fn root(g: &mut [usize], mut a: usize) -> usize {
+        while g[a] != a {
+            g[a] = g[g[a]];
+            a = g[a];
+        }
+        a
+    }
+    let slot = |head: bool| usize::from(!head);
+    for l in links {
+        let (ra, rb) = (root(&mut group, l.a.0), root(&mut group, l.b.0));
+        if ra == rb || next[l.a.0][slot(l.a.1)].is_some() || next[l.b.0][slot(l.b.1)].is_some() {
+            continue;
+        }
+        next[l.a.0][slot(l.a.1)] = Some(l.b);
+        next[l.b.0][slot(l.b.1)] = Some(l.a);
+        group[ra.max(rb)] = ra.min(rb);
+    }
+    let mut placed = vec![false; n];
+    let mut chains = Vec::new();
+    for start in 0..n {
+        if placed[start] {
+            continue;
+        }
+        // Go to one end of this chain, then lay it out from there.
+        let (mut at, mut enter_head) = (start, true);
+        let mut guard = 0;
+        while let Some((p, h)) = next[at][slot(enter_head)] {
+            // Leaving `at` by its head: `p` is entered by `h`, left by the other end.
+            (at, enter_head) = (p, !h);
+            guard += 1;
+            if guard > n {
+                break;
+            }
+        }
+        // `at` is an end piece; it is traversed starting from its free end.
+        let mut parts = Vec::new();
+        let mut cur = Some((at, enter_head));
+        while let Some((p, free_head)) = cur {
+            if placed[p] {
+                break;
+            }
+            placed[p] = true;
+            // Traversed from `free_head`'s end to the other.
+            parts.push((p, !free_head));
+            cur = next[p][slot(!free_head)].map(|(q, h)| (q, h));
+        }
+        chains.push(lay_out(pieces, &parts, metric));
+    }
+    chains
+}
+
+/// A chain's path: its pieces in order (reversed where `reversed`), with a
+/// bridge across each gap that leaves and arrives along the pieces.
+fn lay_out(pieces: &[Piece], parts: &[(usize, bool)], metric: bool) -> Chain {
+    let mut c = Chain {
+        points: Vec::new(),
+        zones: Vec::new(),
+        depths: Vec::new(),
+        length: 0.0,
+        diameter: 0.0,
+        pixels: 0.0,
+        fragments: parts.len(),
+        crossings: 0,
+        line: Vec::new(),
+    };
+    let (mut weighted, mut measured) = (0.0, 0.0);
+    for (k, &(i, reversed)) in parts.iter().enumerate() {
+        let p = &pieces[i];
+        let order: Vec<usize> = if reversed {
+            (0..p.points.len()).rev().collect()
+        } else {
+            (0..p.points.len()).collect()
+        };
+        if k > 0 {
+            let (prev, prev_rev) = parts[k - 1];
+            let q = &pieces[prev];
+            // Leaving `q` at the end it finishes on, entering `p` at the one it starts from.
+            let (a, da) = q.end(prev_rev);
+            let (b, db) = p.end(!reversed);
+            let chord = (b - a).norm();
+            let unit = |v: Vec2| if v.norm() > 0.0 { v / v.norm() } else { v };
+            let steps = libm::ceil(chord) as usize;
+            for s in 1..steps {
+                let t = s as f64 / steps as f64;
+                c.points
+                    .push(hermite(a, unit(da) * chord, b, -unit(db) * chord, t));
+                c.zones.push(NO_ZONE);
+                if metric {
+                    c.depths.push(None);
+                }
+            }
+            c.length += (p.end_3d(!reversed) - q.end_3d(prev_rev)).norm();
+        }
+        for &j in &order {
+            c.points.push(p.points[j]);
+            c.zones.push(p.zones[j]);
+            if metric {
+                c.depths.push(p.depths.get(j).copied().flatten());
+            }
+        }
+        c.line.extend(order.iter().map(|&j| p.line[j]));
+        c.length += p.length;
+        c.pixels += p.pixels;
+        weighted += p.diameter * p.length;
+        measured += p.length;
+    }
+    c.diameter = weighted / measured.max(f64::MIN_POSITIVE);
+    let mut zones: Vec<u32> = Vec::new();
+    let mut k = 0;
+    while k < c.zones.len() {
+        let z = c.zones[k];
+        if z != NO_ZONE {
+            zones.push(z);
+        }
+        while k < c.zones.len() && c.zones[k] == z {
+            k += 1;
+        }
+    }
+    zones.sort_unstable();
+    c.crossings = zones.windows(2).filter(|w| w[0] == w[1]).count();
+    c
+}

@@ -1,0 +1,1104 @@
+//! Initialisation without a learned model: the rope found among whatever
+//! the colour range selects. Each shape of the mask is thinned to a
+//! skeleton ([`skeleton`]), walked the way a rope goes, straight on through
+//! each junction with the least bending ([`graph`]), cut where its width or
+//! depth jumps (a rope touching a phone, two things overlapping in the
+//! image), and each piece is tested as a rope would be: thin, of even
+//! width, long, smooth. The pieces that pass are joined end to end where
+//! their ends are close and point at each other ([`candidates`]); one
+//! candidate is chosen (the one the user clicked, the one nearest the last
+//! known state after a loss, else the longest), lifted to 3D with the
+//! strand on top at each crossing ([`lift`]), and `M` nodes are placed
+//! evenly along it. `docs/algorithm-notes.md`, "Finding the rope", gives
+//! the reasons for each rule.
+
+mod candidates;
+mod graph;
+mod lift;
+mod skeleton;
+
+use alloc::vec::Vec;
+
+use candidates::{join, rope_pieces, Chain, Metric};
+pub use candidates::{
+    DIAMETER_PRIOR_FACTOR, JOIN_DIAMETER_RATIO, JOIN_GAP_DIAMETERS, JOIN_GAP_FRACTION,
+    MAX_JOIN_ANGLE_DEGREES, MAX_TURN_PER_WIDTH_DEGREES, MIN_EVEN_SHARE, MIN_FRAGMENT_ELONGATION,
+    MIN_ROPE_ELONGATION, ROPE_DIAMETER_RANGE,
+};
+pub use graph::{MAX_CROSSING_TURN_DEGREES, MAX_JUNCTION_CELLS};
+use lift::{line_through, resolve_crossings};
+pub use skeleton::MAX_SHAPES;
+
+use super::camera::CameraIntrinsics;
+use super::frame::Frame;
+use super::point_cloud::{CloudSettings, SURFACE_TO_AXIS_RATIO};
+use super::segmentation::Mask;
+use crate::math::{Vec2, Vec3};
+use crate::polyline::{polyline_length, resample_uniform};
+
+/// Fewest pixels on a centre line worth initialising from.
+pub const MIN_CENTRE_LINE_PIXELS: usize = 8;
+/// Shapes smaller than this many pixels are specks, not looked at.
+pub const MIN_SHAPE_PIXELS: usize = 12;
+/// A candidate longer than this multiple of a prior length is not the rope.
+pub const PRIOR_LENGTH_FACTOR: f64 = 1.25;
+/// A click chooses the candidate passing within this many of its widths of
+/// it (and at least [`MIN_HINT_REACH_PX`]).
+pub const HINT_REACH_WIDTHS: f64 = 3.0;
+/// Nearest reach of a click, pixels.
+pub const MIN_HINT_REACH_PX: f64 = 8.0;
+/// Shapes set aside that a report lists (the largest first).
+pub const MAX_REPORTED_SET_ASIDE: usize = 8;
+
+/// Why no rope could be found.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum InitError {
+    /// Nothing in the colour range large enough to be the rope.
+    #[error("no rope in view: the largest shape in the colour range has {largest} pixels, at least {min} needed")]
+    NoRope {
+        /// Pixels in the largest shape.
+        largest: usize,
+        /// The `min_blob_pixels` parameter.
+        min: u32,
+    },
+    /// Shapes in the colour range, none of them rope-shaped.
+    #[error("nothing rope-shaped in view: {shapes} shape(s) in the colour range, none thin, even and long; the largest, {largest}")]
+    NothingRopeShaped {
+        /// Shapes looked at.
+        shapes: usize,
+        /// The largest, and why it is not a rope.
+        largest: SetAside,
+    },
+    /// The centre line found is too short.
+    #[error("centre line too short: {pixels} pixels")]
+    TooShort {
+        /// Pixels on it.
+        pixels: usize,
+    },
+    /// No valid depth anywhere along the centre line.
+    #[error("no valid depth along the rope's centre line")]
+    NoDepth,
+}
+
+/// Why a rope is invalid as a prior.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum PriorError {
+    /// A length that is not positive and finite.
+    #[error("the rope's {field} must be a positive length in metres, got {value}")]
+    NotALength {
+        /// `length_m` or `diameter_m`.
+        field: &'static str,
+        /// The value given.
+        value: f64,
+    },
+}
+
+/// What the user knows of the rope (`dlo.json`'s `rope`), both optional.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct RopePrior {
+    /// Length, metres: candidates longer than [`PRIOR_LENGTH_FACTOR`] times
+    /// it are not the rope, and a re-initialisation is judged against it.
+    pub length: Option<f64>,
+    /// Diameter, metres: a piece is rope only within
+    /// [`DIAMETER_PRIOR_FACTOR`] of it, and it is the radius in force.
+    pub diameter: Option<f64>,
+}
+
+impl RopePrior {
+    /// Checks that each length given is positive and finite.
+    pub fn validate(&self) -> Result<(), PriorError> {
+        for (field, value) in [("length_m", self.length), ("diameter_m", self.diameter)] {
+            if let Some(v) = value {
+                if !(v > 0.0 && v.is_finite()) {
+                    return Err(PriorError::NotALength { field, value: v });
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Why a shape or a candidate is not the rope.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(tag = "kind", rename_all = "snake_case"))]
+pub enum NotRope {
+    /// No strand in its skeleton: a compact blob (a phone, a box).
+    Compact,
+    /// More junctions than a rope has ([`MAX_JUNCTION_CELLS`]).
+    Branched {
+        /// Junction cells.
+        junctions: usize,
+    },
+    /// No depth along it.
+    NoDepth,
+    /// Thinner or thicker than a rope (or than the prior allows).
+    Diameter {
+        /// Its width, millimetres.
+        diameter_mm: f64,
+        /// Thinnest accepted, millimetres.
+        low_mm: f64,
+        /// Thickest accepted, millimetres.
+        high_mm: f64,
+    },
+    /// Its width varies more than a rope's.
+    Uneven {
+        /// Share of it within the tolerance of its median width.
+        even_share: f64,
+    },
+    /// Too short for its width.
+    Short {
+        /// Length over width.
+        elongation: f64,
+    },
+    /// It turns more sharply than a rope can bend.
+    Kinked {
+        /// The sharpest turn over one width, degrees.
+        turn_degrees: f64,
+    },
+    /// Fewer pixels than `min_blob_pixels`.
+    Small {
+        /// Its pixels.
+        pixels: usize,
+    },
+    /// Longer than the rope the prior describes.
+    LongerThanPrior {
+        /// Its length, metres.
+        length_m: f64,
+        /// The prior's, metres.
+        prior_m: f64,
+    },
+}
+
+impl core::fmt::Display for NotRope {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            Self::Compact => write!(f, "compact (no strand in its skeleton)"),
+            Self::Branched { junctions } => write!(f, "too branched ({junctions} junctions)"),
+            Self::NoDepth => write!(f, "without depth"),
+            Self::Diameter {
+                diameter_mm,
+                low_mm,
+                high_mm,
+            } => write!(
+                f,
+                "{diameter_mm:.1} mm wide, outside {low_mm:.1}-{high_mm:.1} mm"
+            ),
+            Self::Uneven { even_share } => write!(
+                f,
+                "of uneven width ({:.0} % of it near its median width)",
+                even_share * 100.0
+            ),
+            Self::Short { elongation } => {
+                write!(f, "only {elongation:.1} times as long as it is wide")
+            }
+            Self::Kinked { turn_degrees } => {
+                write!(f, "kinked ({turn_degrees:.0} degrees within its width)")
+            }
+            Self::Small { pixels } => write!(f, "small ({pixels} pixels)"),
+            Self::LongerThanPrior { length_m, prior_m } => write!(
+                f,
+                "longer than the rope ({length_m:.2} m; the rope is {prior_m:.2} m)"
+            ),
+        }
+    }
+}
+
+/// A shape (or a joined candidate) that is not the rope.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct SetAside {
+    /// Its mask pixels.
+    pub pixels: usize,
+    /// Its centre, image pixels.
+    pub centre: [f64; 2],
+    /// Why.
+    pub reason: NotRope,
+}
+
+impl core::fmt::Display for SetAside {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(
+            f,
+            "{} px at ({:.0}, {:.0}), is {}",
+            self.pixels, self.centre[0], self.centre[1], self.reason
+        )
+    }
+}
+
+/// A rope-shaped candidate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Candidate {
+    /// Length, metres, gaps between fragments included.
+    pub length: f64,
+    /// Diameter, metres.
+    pub diameter: f64,
+    /// Pieces of mask joined into it.
+    pub fragments: usize,
+    /// Crossings with itself.
+    pub crossings: usize,
+    /// Its two ends, image pixels.
+    pub ends: [[f64; 2]; 2],
+}
+
+/// How the candidate was chosen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
+pub enum ChoiceRule {
+    /// The only rope-shaped candidate.
+    Only,
+    /// The longest of several.
+    Longest,
+    /// The one the user clicked.
+    Clicked,
+    /// The one nearest the last known state (re-initialisation after a loss).
+    NearestPrevious,
+}
+
+/// What initialisation saw and why it took what it took.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct InitReport {
+    /// The rope-shaped candidates, longest first.
+    pub candidates: Vec<Candidate>,
+    /// Index of the one taken.
+    pub chosen: usize,
+    /// Why it was taken.
+    pub rule: ChoiceRule,
+    /// Shapes and candidates that are not the rope, largest first (at most
+    /// [`MAX_REPORTED_SET_ASIDE`]).
+    pub set_aside: Vec<SetAside>,
+    /// How many were set aside in all.
+    pub set_aside_count: usize,
+    /// A click was given but no candidate passes near it.
+    pub hint_missed: bool,
+    /// The length taken over the prior's, when a prior length is known.
+    pub prior_length_ratio: Option<f64>,
+}
+
+impl core::fmt::Display for InitReport {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let Some(c) = self.candidates.get(self.chosen) else {
+            return write!(f, "no candidate");
+        };
+        let why = match self.rule {
+            ChoiceRule::Only => "the only rope-shaped candidate",
+            ChoiceRule::Longest => "the longest rope-shaped candidate",
+            ChoiceRule::Clicked => "the candidate clicked",
+            ChoiceRule::NearestPrevious => "the candidate nearest the last known rope",
+        };
+        write!(
+            f,
+            "{:.2} m long, {:.1} mm thick, {} piece(s), {} crossing(s): {why} of {}",
+            c.length,
+            c.diameter * 1000.0,
+            c.fragments,
+            c.crossings,
+            self.candidates.len()
+        )?;
+        if self.hint_missed {
+            write!(f, " (no candidate passes near the click)")?;
+        }
+        if let Some(r) = self.prior_length_ratio {
+            write!(f, "; {:.0} % of the rope's known length", r * 100.0)?;
+        }
+        if self.set_aside_count > 0 {
+            write!(f, "; set aside {}", self.set_aside_count)?;
+            for (k, s) in self.set_aside.iter().enumerate() {
+                write!(f, "{} {s}", if k == 0 { ":" } else { ";" })?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// What guides the choice among the candidates.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct InitGuide<'a> {
+    /// What the user knows of the rope.
+    pub prior: RopePrior,
+    /// A pixel the user clicked on the rope.
+    pub hint: Option<Vec2>,
+    /// The last known nodes, after a loss: the candidate nearest them is
+    /// taken, among those of at least `min_length`.
+    pub previous: &'a [Vec3],
+    /// Shortest candidate worth taking near `previous`, metres.
+    pub min_length: f64,
+}
+
+/// A fresh set of nodes for the rope in this frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Initialisation {
+    /// `M` nodes evenly spaced along the centre line.
+    pub nodes: Vec<Vec3>,
+    /// Length of the centre line, metres.
+    pub length: f64,
+    /// The rope's radius estimated from its width in the image, metres
+    /// (`None` when not asked for or not measurable).
+    pub radius: Option<f64>,
+    /// What was found and why this was taken.
+    pub report: InitReport,
+}
+
+/// Smallest radius an estimate may give, metres (a thread).
+pub const MIN_ESTIMATED_RADIUS: f64 = 0.0005;
+/// Largest radius an estimate may give, metres (a hose).
+pub const MAX_ESTIMATED_RADIUS: f64 = 0.05;
+
+/// The rope's radius from its mask: the mean width in pixels (its pixels
+/// over the centre line's length in pixels) at the median depth of the
+/// centre line, `r = w z / (2 f)`. `None` outside the plausible range.
+pub fn estimate_radius(
+    blob_pixels: usize,
+    path: &[Vec2],
+    line: &[Vec3],
+    camera: &CameraIntrinsics,
+) -> Option<f64> {
+    let length_px: f64 = path.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
+    if !(length_px > 0.0) || line.is_empty() {
+        return None;
+    }
+    let mut z: Vec<f64> = line.iter().map(|p| p.z).filter(|z| z.is_finite()).collect();
+    if z.is_empty() {
+        return None;
+    }
+    z.sort_by(f64::total_cmp);
+    let width_px = blob_pixels as f64 / length_px;
+    let r = 0.5 * width_px * z[z.len() / 2] / (0.5 * (camera.fx + camera.fy));
+    (MIN_ESTIMATED_RADIUS..=MAX_ESTIMATED_RADIUS)
+        .contains(&r)
+        .then_some(r)
+}
+
+/// What initialisation needs from the parameters.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InitSettings {
+    /// Nodes to place (`M`).
+    pub node_count: usize,
+    /// Fewest mask pixels taken as the rope.
+    pub min_blob_pixels: u32,
+    /// Depth range and the surface-to-axis push of the 3D lift.
+    pub cloud: CloudSettings,
+    /// Estimate the radius from the image and push the line by it instead
+    /// of by `cloud.axis_offset`.
+    pub estimate_radius: bool,
+}
+
+/// The pixels of the largest 8-connected shape of `mask`, in image order.
+pub fn largest_blob(mask: &Mask) -> Vec<usize> {
+    let (shapes, _) = skeleton::shapes(mask, 1);
+    shapes
+        .into_iter()
+        .next()
+        .map_or_else(Vec::new, |s| s.pixels)
+}
+
+/// The candidates and what was set aside, from the whole mask.
+struct Found {
+    chains: Vec<Chain>,
+    set_aside: Vec<SetAside>,
+    shapes: usize,
+    largest: usize,
+}
+
+fn find(
+    mask: &Mask,
+    metric: Option<Metric<'_>>,
+    settings_min_pixels: u32,
+    prior: RopePrior,
+) -> Found {
+    let (shapes, labels) = skeleton::shapes(mask, MIN_SHAPE_PIXELS);
+    let largest = shapes.first().map_or(0, |s| s.pixels.len());
+    let (pieces, mut set_aside) = rope_pieces(&shapes, &labels, mask, metric, prior.diameter);
+    let mut chains = join(&pieces, metric.is_some());
+    chains.sort_by(|a, b| b.length.total_cmp(&a.length));
+    let centre = |c: &Chain| {
+        let n = c.points.len().max(1) as f64;
+        let s = c.points.iter().fold(Vec2::zeros(), |a, p| a + p);
+        [s.x / n, s.y / n]
+    };
+    chains.retain(|c| {
+        let elongation = c.length / c.diameter;
+        let reason = if !(elongation >= MIN_ROPE_ELONGATION) {
+            Some(NotRope::Short { elongation })
+        } else if c.pixels < f64::from(settings_min_pixels) {
+            Some(NotRope::Small {
+                pixels: c.pixels as usize,
+            })
+        } else {
+            match (metric, prior.length) {
+                (Some(_), Some(l)) if c.length > PRIOR_LENGTH_FACTOR * l => {
+                    Some(NotRope::LongerThanPrior {
+                        length_m: c.length,
+                        prior_m: l,
+                    })
+                }
+                _ => None,
+            }
+        };
+        if let Some(reason) = reason {
+            set_aside.push(SetAside {
+                pixels: c.pixels as usize,
+                centre: centre(c),
+                reason,
+            });
+        }
+        reason.is_none()
+    });
+    set_aside.sort_by(|a, b| b.pixels.cmp(&a.pixels));
+    Found {
+        chains,
+        set_aside,
+        shapes: shapes.len(),
+        largest,
+    }
+}
+
+impl Found {
+    /// The error when no candidate is left.
+    fn nothing(&self, min: u32) -> InitError {
+        match self.set_aside.first() {
+            Some(&largest) if self.largest >= min as usize => InitError::NothingRopeShaped {
+                shapes: self.shapes,
+                largest,
+            },
+            _ => InitError::NoRope {
+                largest: self.largest,
+                min,
+            },
+        }
+    }
+
+    /// The candidate to take, and why.
+    fn choose(&self, guide: &InitGuide<'_>) -> (usize, ChoiceRule, bool) {
+        let mut hint_missed = false;
+        if let Some(h) = guide.hint {
+            let near = self
+                .chains
+                .iter()
+                .enumerate()
+                .map(|(k, c)| {
+                    let d = c
+                        .points
+                        .iter()
+                        .map(|p| (p - h).norm())
+                        .fold(f64::MAX, f64::min);
+                    let width = c.pixels / c.length_px().max(1.0);
+                    (k, d, (HINT_REACH_WIDTHS * width).max(MIN_HINT_REACH_PX))
+                })
+                .filter(|&(_, d, reach)| d <= reach)
+                .min_by(|a, b| a.1.total_cmp(&b.1));
+            match near {
+                Some((k, _, _)) => return (k, ChoiceRule::Clicked, false),
+                None => hint_missed = true,
+            }
+        }
+        if !guide.previous.is_empty() {
+            let nearest = self
+                .chains
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| c.length >= guide.min_length)
+                .map(|(k, c)| (k, mean_distance(guide.previous, &c.line)))
+                .min_by(|a, b| a.1.total_cmp(&b.1));
+            if let Some((k, _)) = nearest {
+                return (k, ChoiceRule::NearestPrevious, hint_missed);
+            }
+        }
+        let rule = if self.chains.len() == 1 {
+            ChoiceRule::Only
+        } else {
+            ChoiceRule::Longest
+        };
+        (0, rule, hint_missed)
+    }
+}
+
+/// Mean distance from each of `nodes` to the nearest of (at most 256 of) `line`'s points.
+fn mean_distance(nodes: &[Vec3], line: &[Vec3]) -> f64 {
+    let stride = line.len().div_ceil(256).max(1);
+    let sum: f64 = nodes
+        .iter()
+        .map(|n| {
+            line.iter()
+                .step_by(stride)
+                .map(|p| (p - n).norm())
+                .fold(f64::INFINITY, f64::min)
+        })
+        .sum();
+    sum / nodes.len().max(1) as f64
+}
+
+/// The rope's centre line in the image: an ordered list of pixel positions
+/// along the longest rope-shaped candidate of `mask` (judged in the image
+/// alone, without depth). The end with the smaller x (then smaller y)
+/// comes first.
+pub fn find_centre_line(mask: &Mask, min_blob_pixels: u32) -> Result<Vec<Vec2>, InitError> {
+    let found = find(mask, None, min_blob_pixels, RopePrior::default());
+    let Some(chain) = found.chains.first() else {
+        return Err(found.nothing(min_blob_pixels));
+    };
+    let mut path = chain.points.clone();
+    if path.len() < MIN_CENTRE_LINE_PIXELS {
+        return Err(InitError::TooShort { pixels: path.len() });
+    }
+    let (first, last) = (path[0], path[path.len() - 1]);
+    if (last.x, last.y) < (first.x, first.y) {
+        path.reverse();
+    }
+    Ok(path)
+}
+
+/// The whole stage: candidates, the choice, the 3D lift, even placement of `M` nodes.
+pub fn initialise(
+    frame: &Frame<'_>,
+    mask: &Mask,
+    camera: &CameraIntrinsics,
+    settings: &InitSettings,
+    guide: &InitGuide<'_>,
+) -> Result<Initialisation, InitError> {
+    let metric = Metric {
+        frame,
+        camera,
+        cloud: &settings.cloud,
+    };
+    let found = find(mask, Some(metric), settings.min_blob_pixels, guide.prior);
+    if found.chains.is_empty() {
+        return Err(found.nothing(settings.min_blob_pixels));
+    }
+    let (chosen, rule, hint_missed) = found.choose(guide);
+    let chain = &found.chains[chosen];
+    let (mut path, mut zones, mut depths) = (
+        chain.points.clone(),
+        chain.zones.clone(),
+        chain.depths.clone(),
+    );
+    if path.len() < MIN_CENTRE_LINE_PIXELS {
+        return Err(InitError::TooShort { pixels: path.len() });
+    }
+    let (first, last) = (path[0], path[path.len() - 1]);
+    if (last.x, last.y) < (first.x, first.y) {
+        path.reverse();
+        zones.reverse();
+        depths.reverse();
+    }
+    resolve_crossings(&mut depths, &zones);
+    let mut line = line_through(&path, &depths, camera, settings.cloud.axis_offset)
+        .ok_or(InitError::NoDepth)?;
+    let mut radius = None;
+    if settings.estimate_radius {
+        radius = estimate_radius(chain.pixels as usize, &path, &line, camera);
+        if let Some(r) = radius {
+            // Lift again, pushed to the axis of a rope of this radius.
+            line = line_through(&path, &depths, camera, r * SURFACE_TO_AXIS_RATIO)
+                .ok_or(InitError::NoDepth)?;
+        }
+    }
+    let length = polyline_length(&line);
+    if !(length > 0.0) || !length.is_finite() {
+        return Err(InitError::TooShort { pixels: path.len() });
+    }
+    let candidates = found
+        .chains
+        .iter()
+        .map(|c| {
+            let (a, b) = (c.points[0], c.points[c.points.len() - 1]);
+            Candidate {
+                length: c.length,
+                diameter: c.diameter,
+                fragments: c.fragments,
+                crossings: c.crossings,
+                ends: [[a.x, a.y], [b.x, b.y]],
+            }
+        })
+        .collect();
+    let report = InitReport {
+        candidates,
+        chosen,
+        rule,
+        set_aside_count: found.set_aside.len(),
+        set_aside: found
+            .set_aside
+            .iter()
+            .take(MAX_REPORTED_SET_ASIDE)
+            .copied()
+            .collect(),
+        hint_missed,
+        prior_length_ratio: guide.prior.length.map(|l| length / l),
+    };
+    Ok(Initialisation {
+        nodes: resample_uniform(&line, settings.node_count),
+        length,
+        radius,
+        report,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use alloc::vec;
+
+    /// Draws a thick polyline (disc brush) into a mask.
+    fn draw(mask: &mut Mask, curve: &[Vec2], radius: f64) {
+        for w in curve.windows(2) {
+            let steps = ((w[1] - w[0]).norm() * 2.0) as usize + 1;
+            for s in 0..=steps {
+                let p = w[0] + (w[1] - w[0]) * (s as f64 / steps as f64);
+                let r = radius as i64 + 1;
+                for dv in -r..=r {
+                    for du in -r..=r {
+                        let (u, v) = (libm::round(p.x) as i64 + du, libm::round(p.y) as i64 + dv);
+                        let q = Vec2::new(u as f64, v as f64);
+                        let inside =
+                            u >= 0 && v >= 0 && u < mask.width as i64 && v < mask.height as i64;
+                        if inside && (q - p).norm() <= radius {
+                            mask.data[(v * mask.width as i64 + u) as usize] = true;
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    fn curve(f: impl Fn(f64) -> Vec2) -> Vec<Vec2> {
+        (0..=400).map(|i| f(i as f64 / 400.0)).collect()
+    }
+
+    /// Checks that `line` runs from one end of `truth` to the other, in order.
+    fn assert_follows(line: &[Vec2], truth: &[Vec2], tol: f64) {
+        let (a, b) = (truth[0], truth[truth.len() - 1]);
+        let (s, e) = (line[0], line[line.len() - 1]);
+        let direct = (s - a).norm().max((e - b).norm());
+        let swapped = (s - b).norm().max((e - a).norm());
+        assert!(direct.min(swapped) < tol, "ends {s:?} {e:?} vs {a:?} {b:?}");
+        let truth: Vec<Vec2> = if direct <= swapped {
+            truth.to_vec()
+        } else {
+            truth.iter().rev().copied().collect()
+        };
+        // Each line point lies on the curve, and the index of its nearest
+        // truth sample never goes back by more than a rope width.
+        let mut last = 0usize;
+        for p in line {
+            let (k, d) = truth
+                .iter()
+                .enumerate()
+                .map(|(k, q)| (k, (p - q).norm()))
+                .fold((0, f64::MAX), |best, x| if x.1 < best.1 { x } else { best });
+            assert!(d < tol, "point {p:?} is {d} px off the curve");
+            assert!(k + 10 >= last, "order goes back at {p:?}");
+            last = last.max(k);
+        }
+    }
+
+    #[test]
+    fn straight_u_and_s_shapes_with_noise_blobs() {
+        let shapes: [Vec<Vec2>; 3] = [
+            curve(|t| Vec2::new(60.0 + 500.0 * t, 240.0 + 30.0 * t)),
+            curve(|t| {
+                let a = core::f64::consts::PI * t;
+                Vec2::new(
+                    320.0 + 150.0 * libm::sin(a) - 100.0 * (1.0 - t),
+                    240.0 - 150.0 * libm::cos(a),
+                )
+            }),
+            curve(|t| {
+                let a = core::f64::consts::TAU * t;
+                Vec2::new(100.0 + 440.0 * t, 240.0 + 120.0 * libm::sin(a))
+            }),
+        ];
+        for shape in &shapes {
+            let mut mask = Mask::new(640, 480);
+            draw(&mut mask, shape, 7.0);
+            // Noise: small blobs that must be ignored.
+            draw(
+                &mut mask,
+                &[Vec2::new(20.0, 20.0), Vec2::new(24.0, 22.0)],
+                3.0,
+            );
+            draw(
+                &mut mask,
+                &[Vec2::new(600.0, 450.0), Vec2::new(601.0, 450.0)],
+                4.0,
+            );
+            let line = find_centre_line(&mask, 150).expect("centre line");
+            // The blob, drawn with a disc, reaches one radius past the curve's ends.
+            assert_follows(&line, shape, 9.0);
+        }
+    }
+
+    #[test]
+    fn empty_and_tiny_masks_are_errors() {
+        let mask = Mask::new(64, 48);
+        assert!(matches!(
+            find_centre_line(&mask, 10),
+            Err(InitError::NoRope { largest: 0, .. })
+        ));
+        // A speck is not even looked at.
+        let mut mask = Mask::new(64, 48);
+        mask.data[100] = true;
+        assert!(matches!(
+            find_centre_line(&mask, 1),
+            Err(InitError::NoRope { largest: 0, .. })
+        ));
+    }
+
+    /// A flat scene at 0.6 m (depth in millimetres) and the default settings.
+    struct Scene {
+        mask: Mask,
+        depth: Vec<u16>,
+        rgb: Vec<u8>,
+    }
+
+    impl Scene {
+        fn new() -> Self {
+            Self {
+                mask: Mask::new(640, 480),
+                depth: vec![600; 640 * 480],
+                rgb: vec![0; 640 * 480 * 3],
+            }
+        }
+
+        /// Draws `curve` with a disc of `radius` pixels at `depth_mm`.
+        fn draw(&mut self, curve: &[Vec2], radius: f64, depth_mm: u16) {
+            let before = self.mask.data.clone();
+            draw(&mut self.mask, curve, radius);
+            for (i, (&b, &a)) in before.iter().zip(&self.mask.data).enumerate() {
+                if a && !b {
+                    self.depth[i] = depth_mm;
+                }
+            }
+            // Where it lies over pixels already set, it is on top.
+            let mut top = Mask::new(640, 480);
+            draw(&mut top, curve, radius);
+            for (i, &t) in top.data.iter().enumerate() {
+                if t {
+                    self.depth[i] = self.depth[i].min(depth_mm);
+                }
+            }
+        }
+
+        fn initialise(&self, guide: &InitGuide<'_>) -> Result<Initialisation, InitError> {
+            let frame = Frame::new(640, 480, &self.rgb, &self.depth, 0.001).expect("frame");
+            let settings = crate::params::Params::default().init();
+            initialise(
+                &frame,
+                &self.mask,
+                &CameraIntrinsics::D435I_640X480,
+                &settings,
+                guide,
+            )
+        }
+    }
+
+    /// The image of `nodes` (metres) in the test camera.
+    fn projected(nodes: &[Vec3]) -> Vec<Vec2> {
+        let cam = CameraIntrinsics::D435I_640X480;
+        nodes
+            .iter()
+            .map(|n| Vec2::new(cam.fx * n.x / n.z + cam.cx, cam.fy * n.y / n.z + cam.cy))
+            .collect()
+    }
+
+    fn px_length(c: &[Vec2]) -> f64 {
+        c.windows(2).map(|w| (w[1] - w[0]).norm()).sum()
+    }
+
+    /// An S curve 5 px wide (a thin cable, 5 mm at 0.6 m).
+    fn cable() -> Vec<Vec2> {
+        curve(|t| {
+            let a = core::f64::consts::TAU * t;
+            Vec2::new(330.0 + 280.0 * t, 240.0 + 80.0 * libm::sin(a))
+        })
+    }
+
+    #[test]
+    fn a_thin_cable_wins_over_a_larger_phone() {
+        let mut scene = Scene::new();
+        // A phone, 72 x 150 px (7 x 15 cm at 0.6 m), 8 mm proud of the table.
+        let phone = [Vec2::new(120.0, 170.0), Vec2::new(120.0, 310.0)];
+        scene.draw(&phone, 36.0, 592);
+        scene.draw(&cable(), 2.5, 598);
+        // The phone is the largest blob: the old rule took it.
+        let blob = largest_blob(&scene.mask);
+        assert!(
+            blob.iter().any(|&i| i % 640 < 200),
+            "phone is not the largest"
+        );
+        let init = scene.initialise(&InitGuide::default()).expect("rope found");
+        assert_follows(&projected(&init.nodes), &cable(), 6.0);
+        let truth = px_length(&cable()) * 0.6 / 615.0;
+        assert!(
+            (init.length / truth - 1.0).abs() < 0.05,
+            "length {} of {truth}",
+            init.length
+        );
+        assert_eq!(init.report.candidates.len(), 1, "{}", init.report);
+        assert!(
+            init.report
+                .set_aside
+                .iter()
+                .any(|s| s.centre[0] < 200.0 && s.pixels > 10_000),
+            "the phone is not reported: {}",
+            init.report
+        );
+    }
+
+    #[test]
+    fn a_thin_cable_touching_a_phone_is_cut_from_it() {
+        let mut scene = Scene::new();
+        // Its bottom edge lies over the cable's middle.
+        let phone = [Vec2::new(470.0, 110.0), Vec2::new(470.0, 206.0)];
+        scene.draw(&phone, 36.0, 592);
+        scene.draw(&cable(), 2.5, 598);
+        assert_eq!(skeleton::shapes(&scene.mask, 1).0.len(), 1, "not touching");
+        let init = scene.initialise(&InitGuide::default()).expect("rope found");
+        assert_follows(&projected(&init.nodes), &cable(), 6.0);
+    }
+
+    #[test]
+    fn a_curve_in_three_fragments_is_one_rope() {
+        let mut scene = Scene::new();
+        let rope = cable();
+        scene.draw(&rope, 2.5, 598);
+        // Two pens across it, 10 px wide: three pieces of mask.
+        for x in [420.0, 520.0] {
+            for v in 0..480usize {
+                for u in (x as usize - 5)..(x as usize + 5) {
+                    scene.mask.data[v * 640 + u] = false;
+                }
+            }
+        }
+        assert_eq!(skeleton::shapes(&scene.mask, 1).0.len(), 3);
+        let init = scene.initialise(&InitGuide::default()).expect("rope found");
+        let chosen = init.report.candidates[init.report.chosen];
+        assert_eq!(chosen.fragments, 3, "{}", init.report);
+        let truth = px_length(&rope) * 0.6 / 615.0;
+        assert!(
+            (init.length / truth - 1.0).abs() < 0.05,
+            "length {} of {truth}",
+            init.length
+        );
+        assert_follows(&projected(&init.nodes), &rope, 6.0);
+    }
+
+    #[test]
+    fn an_x_crossing_is_passed_straight_through() {
+        let mut mask = Mask::new(640, 480);
+        let a = curve(|t| Vec2::new(120.0 + 400.0 * t, 60.0 + 360.0 * t));
+        let b = curve(|t| Vec2::new(140.0 + 360.0 * t, 420.0 - 360.0 * t));
+        draw(&mut mask, &a, 7.0);
+        draw(&mut mask, &b, 7.0);
+        let line = find_centre_line(&mask, 150).expect("centre line");
+        // Straight through: along one stroke from end to end, never into the other.
+        let follows = |c: &[Vec2]| line.iter().all(|p| c.iter().any(|q| (p - q).norm() < 9.0));
+        assert!(
+            follows(&a) || follows(&b),
+            "the path turned at the crossing"
+        );
+        assert!(px_length(&line) > 0.9 * px_length(&a).min(px_length(&b)));
+    }
+
+    /// A loop crossing itself (the nodal cubic `y^2 = x^2 (x + 1)`), the
+    /// strand at `t = 1` 15 mm over the one at `t = -1`.
+    fn alpha() -> Vec<Vec2> {
+        curve(|s| {
+            let t = -1.4 + 2.8 * s;
+            Vec2::new(
+                320.0 - 110.0 * (t * t - 1.0),
+                240.0 + 110.0 * t * (t * t - 1.0),
+            )
+        })
+    }
+
+    #[test]
+    fn a_loop_crossing_itself_is_followed_round_and_lifted_with_its_top_strand() {
+        let mut scene = Scene::new();
+        let rope = alpha();
+        let n = rope.len();
+        // The strand at t = 1 rises 15 mm as it passes over the other
+        // (t = -1.4 + 2.8 s, so s = 6 / 7 at the crossing).
+        let depth_mm = |k: usize| {
+            let d = (k as f64 / (n - 1) as f64 - 6.0 / 7.0) / 0.12;
+            let bump = if d.abs() < 1.0 {
+                0.5 + 0.5 * libm::cos(core::f64::consts::PI * d)
+            } else {
+                0.0
+            };
+            600.0 - 15.0 * bump
+        };
+        for k in 1..n {
+            scene.draw(&rope[k - 1..=k], 7.0, libm::round(depth_mm(k)) as u16);
+        }
+        let init = scene.initialise(&InitGuide::default()).expect("rope found");
+        let nodes = projected(&init.nodes);
+        assert_follows(&nodes, &rope, 9.0);
+        // The true length, with a rope radius at each rounded tip.
+        let cam = CameraIntrinsics::D435I_640X480;
+        let at = |k: usize| cam.deproject(rope[k].x, rope[k].y, depth_mm(k) / 1000.0);
+        let truth: f64 =
+            (1..n).map(|k| (at(k) - at(k - 1)).norm()).sum::<f64>() + 2.0 * 7.0 * 0.6 / 615.0;
+        assert!(
+            (init.length / truth - 1.0).abs() < 0.05,
+            "length {} of {truth} (the loop was cut off?)",
+            init.length
+        );
+        let chosen = init.report.candidates[init.report.chosen];
+        assert_eq!(chosen.crossings, 1, "{}", init.report);
+        // The crossing is the image point (320, 240): the node of the lower
+        // strand nearest it lies at the table's depth, not the top strand's.
+        let near = |from: usize, to: usize| {
+            (from..to)
+                .min_by(|&a, &b| {
+                    let d = |k: usize| (nodes[k] - Vec2::new(320.0, 240.0)).norm();
+                    d(a).total_cmp(&d(b))
+                })
+                .expect("nodes")
+        };
+        let m = init.nodes.len();
+        let (low, high) = if init.nodes[0].y < init.nodes[m - 1].y {
+            (near(0, m / 2), near(m / 2, m))
+        } else {
+            (near(m / 2, m), near(0, m / 2))
+        };
+        assert!(
+            init.nodes[high].z < init.nodes[low].z - 0.008,
+            "top strand at {} m, lower at {} m",
+            init.nodes[high].z,
+            init.nodes[low].z
+        );
+    }
+
+    #[test]
+    fn nothing_rope_shaped_is_a_clear_error() {
+        let mut scene = Scene::new();
+        scene.draw(
+            &[Vec2::new(120.0, 170.0), Vec2::new(120.0, 310.0)],
+            36.0,
+            592,
+        );
+        scene.draw(
+            &[Vec2::new(400.0, 240.0), Vec2::new(401.0, 240.0)],
+            40.0,
+            590,
+        );
+        let err = scene
+            .initialise(&InitGuide::default())
+            .expect_err("no rope");
+        let InitError::NothingRopeShaped { shapes, largest } = err else {
+            panic!("{err}");
+        };
+        assert_eq!(shapes, 2);
+        assert!(largest.pixels > 5000);
+        let text = alloc::format!("{}", InitError::NothingRopeShaped { shapes, largest });
+        assert!(text.starts_with("nothing rope-shaped in view"), "{text}");
+    }
+
+    #[test]
+    fn a_click_or_the_last_state_chooses_among_candidates() {
+        let mut scene = Scene::new();
+        let long = cable();
+        let short = curve(|t| Vec2::new(60.0 + 200.0 * t, 100.0 + 20.0 * t));
+        scene.draw(&long, 2.5, 598);
+        scene.draw(&short, 2.5, 598);
+        let first = scene.initialise(&InitGuide::default()).expect("rope");
+        assert_eq!(first.report.rule, ChoiceRule::Longest);
+        assert_follows(&projected(&first.nodes), &long, 6.0);
+        let clicked = scene
+            .initialise(&InitGuide {
+                hint: Some(Vec2::new(161.0, 111.0)),
+                ..InitGuide::default()
+            })
+            .expect("rope");
+        assert_eq!(clicked.report.rule, ChoiceRule::Clicked);
+        assert_follows(&projected(&clicked.nodes), &short, 6.0);
+        let missed = scene
+            .initialise(&InitGuide {
+                hint: Some(Vec2::new(300.0, 400.0)),
+                ..InitGuide::default()
+            })
+            .expect("rope");
+        assert!(missed.report.hint_missed && missed.report.rule == ChoiceRule::Longest);
+        let again = scene
+            .initialise(&InitGuide {
+                previous: &clicked.nodes,
+                min_length: 0.1,
+                ..InitGuide::default()
+            })
+            .expect("rope");
+        assert_eq!(again.report.rule, ChoiceRule::NearestPrevious);
+        assert_follows(&projected(&again.nodes), &short, 6.0);
+        // A length the short one does not reach leaves the long one.
+        let longer = scene
+            .initialise(&InitGuide {
+                previous: &clicked.nodes,
+                min_length: 0.3,
+                ..InitGuide::default()
+            })
+            .expect("rope");
+        assert_follows(&projected(&longer.nodes), &long, 6.0);
+    }
+
+    #[test]
+    fn a_prior_sets_aside_what_the_rope_cannot_be() {
+        let mut scene = Scene::new();
+        scene.draw(&cable(), 2.5, 598);
+        let truth = px_length(&cable()) * 0.6 / 615.0;
+        let with = |prior| {
+            scene.initialise(&InitGuide {
+                prior,
+                ..InitGuide::default()
+            })
+        };
+        let right = with(RopePrior {
+            length: Some(truth),
+            diameter: Some(0.005),
+        })
+        .expect("the rope");
+        let r = right.report.prior_length_ratio.expect("ratio");
+        assert!((r - 1.0).abs() < 0.05, "{r}");
+        // A 20 mm rope is not this 5 mm cable; a 0.3 m rope not this 0.5 m one.
+        assert!(matches!(
+            with(RopePrior {
+                length: None,
+                diameter: Some(0.02)
+            }),
+            Err(InitError::NothingRopeShaped {
+                largest: SetAside {
+                    reason: NotRope::Diameter { .. },
+                    ..
+                },
+                ..
+            })
+        ));
+        assert!(matches!(
+            with(RopePrior {
+                length: Some(0.3),
+                diameter: None
+            }),
+            Err(InitError::NothingRopeShaped {
+                largest: SetAside {
+                    reason: NotRope::LongerThanPrior { .. },
+                    ..
+                },
+                ..
+            })
+        ));
+        assert!(RopePrior {
+            length: Some(-1.0),
+            diameter: None
+        }
+        .validate()
+        .is_err());
+        assert!(RopePrior {
+            length: None,
+            diameter: Some(f64::NAN)
+        }
+        .validate()
+        .is_err());
+    }
+}

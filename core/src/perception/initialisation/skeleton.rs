@@ -1,0 +1,403 @@
+//! The mask's shapes one by one: connected components, each cropped to a
+//! grid with its distance transform (half the local width of the shape)
+//! and its skeleton (Zhang-Suen thinning).
+
+use alloc::vec;
+use alloc::vec::Vec;
+
+use crate::math::Vec2;
+use crate::perception::segmentation::Mask;
+
+/// Most shapes of one mask examined, the largest first: a colour range that
+/// selects thousands of specks (a textured table) costs a bounded amount.
+pub const MAX_SHAPES: usize = 64;
+
+/// One 8-connected component of the mask.
+#[derive(Debug, Clone)]
+pub(super) struct Shape {
+    /// Image indices of its pixels.
+    pub pixels: Vec<usize>,
+    /// Its label in the label image (1-based).
+    pub label: u32,
+}
+
+impl Shape {
+    /// Mean position of its pixels, image coordinates.
+    pub fn centre(&self, image_width: u32) -> Vec2 {
+        let w = image_width as usize;
+        let n = self.pixels.len().max(1) as f64;
+        let (su, sv) = self.pixels.iter().fold((0.0, 0.0), |(a, b), &i| {
+            (a + (i % w) as f64, b + (i / w) as f64)
+        });
+        Vec2::new(su / n, sv / n)
+    }
+}
+
+/// The mask's components of at least `min_pixels` pixels, largest first (at
+/// most [`MAX_SHAPES`]), and an image of their labels (0 elsewhere).
+pub(super) fn shapes(mask: &Mask, min_pixels: usize) -> (Vec<Shape>, Vec<u32>) {
+    let (w, h) = (mask.width as i64, mask.height as i64);
+    let mut label = vec![0u32; mask.data.len()];
+    let mut found: Vec<Vec<usize>> = Vec::new();
+    let mut stack = Vec::new();
+    // Labels are provisional here (u32::MAX marks a visited pixel).
+    for start in 0..mask.data.len() {
+        if !mask.data[start] || label[start] != 0 {
+            continue;
+        }
+        let mut blob = Vec::new();
+        label[start] = u32::MAX;
+        stack.push(start);
+        while let Some(i) = stack.pop() {
+            blob.push(i);
+            let (u, v) = ((i as i64) % w, (i as i64) / w);
+            for dv in -1..=1 {
+                for du in -1..=1 {
+                    let (nu, nv) = (u + du, v + dv);
+                    if nu < 0 || nv < 0 || nu >= w || nv >= h {
+                        continue;
+                    }
+                    let j = (nv * w + nu) as usize;
+                    if mask.data[j] && label[j] == 0 {
+                        label[j] = u32::MAX;
+                        stack.push(j);
+                    }
+                }
+            }
+        }
+        if blob.len() >= min_pixels.max(1) {
+            found.push(blob);
+        }
+    }
+    // Largest first; equal sizes by first pixel, so the order is the mask's.
+    found.sort_by(|a, b| b.len().cmp(&a.len()).then(a[0].cmp(&b[0])));
+    found.truncate(MAX_SHAPES);
+    label.fill(0);
+    let shapes = found
+        .into_iter()
+        .enumerate()
+        .map(|(k, mut pixels)| {
+            pixels.sort_unstable();
+            for &i in &pixels {
+                label[i] = k as u32 + 1;
+            }
+            Shape {
+                pixels,
+                label: k as u32 + 1,
+            }
+        })
+        .collect();
+    (shapes, label)
+}
+
+/// A binary grid cropped around a shape, with a one-cell empty border.
+pub(super) struct Grid {
+    /// Width in cells.
+    pub w: usize,
+    /// Height in cells.
+    pub h: usize,
+    /// Image coordinates of cell (0, 0).
+    pub u0: i64,
+    /// Image coordinates of cell (0, 0).
+    pub v0: i64,
+    /// Set cells: the shape, then its skeleton after [`Grid::thin`].
+    pub cells: Vec<bool>,
+    /// Distance from each cell of the shape to the nearest cell outside it,
+    /// in cells (0 outside): the radius of the largest disc centred there.
+    pub dist: Vec<f32>,
+}
+
+impl Grid {
+    /// The grid of `pixels` (image indices) of an image `image_width` wide,
+    /// with its distance transform.
+    pub fn around(pixels: &[usize], image_width: u32) -> Self {
+        let w_img = image_width as usize;
+        let (mut umin, mut vmin, mut umax, mut vmax) = (usize::MAX, usize::MAX, 0, 0);
+        for &i in pixels {
+            let (u, v) = (i % w_img, i / w_img);
+            umin = umin.min(u);
+            umax = umax.max(u);
+            vmin = vmin.min(v);
+            vmax = vmax.max(v);
+        }
+        if pixels.is_empty() {
+            (umin, vmin) = (0, 0);
+        }
+        let (w, h) = (umax - umin + 3, vmax - vmin + 3);
+        let mut cells = vec![false; w * h];
+        for &i in pixels {
+            let (u, v) = (i % w_img, i / w_img);
+            cells[(v - vmin + 1) * w + (u - umin + 1)] = true;
+        }
+        let dist = distance_transform(&cells, w, h);
+        Self {
+            w,
+            h,
+            u0: umin as i64 - 1,
+            v0: vmin as i64 - 1,
+            cells,
+            dist,
+        }
+    }
+
+    /// The eight neighbours P2..P9 of cell `i` (N, NE, E, SE, S, SW, W, NW).
+    /// `i` must not lie on the border (the shape never does).
+    pub fn ring(&self, i: usize) -> [usize; 8] {
+        let w = self.w;
+        [
+            i - w,
+            i - w + 1,
+            i + 1,
+            i + w + 1,
+            i + w,
+            i + w - 1,
+            i - 1,
+            i - w - 1,
+        ]
+    }
+
+    /// `true` for a cell off the one-cell border, whose ring exists.
+    pub fn inside(&self, i: usize) -> bool {
+        let (x, y) = (i % self.w, i / self.w);
+        x >= 1 && y >= 1 && x + 1 < self.w && y + 1 < self.h
+    }
+
+    /// Zhang-Suen thinning to a one-cell-wide skeleton.
+    pub fn thin(&mut self) {
+        let mut live: Vec<usize> = (0..self.cells.len()).filter(|&i| self.cells[i]).collect();
+        let mut remove = Vec::new();
+        loop {
+            let mut changed = false;
+            for pass in 0..2 {
+                remove.clear();
+                for &i in &live {
+                    let p = self.ring(i).map(|j| self.cells[j]);
+                    let b = p.iter().filter(|&&x| x).count();
+                    if !(2..=6).contains(&b) {
+                        continue;
+                    }
+                    if transitions(&p) != 1 {
+                        continue;
+                    }
+                    let (n, e, s, wst) = (p[0], p[2], p[4], p[6]);
+                    // Zhang-Suen: first pass P2.P4.P6 = 0 and P4.P6.P8 = 0,
+                    // second pass P2.P4.P8 = 0 and P2.P6.P8 = 0.
+                    let ok = if pass == 0 {
+                        !(e && s && (n || wst))
+                    } else {
+                        !(n && wst && (e || s))
+                    };
+                    if ok {
+                        remove.push(i);
+                    }
+                }
+                for &i in &remove {
+                    self.cells[i] = false;
+                }
+                changed |= !remove.is_empty();
+                live.retain(|&i| self.cells[i]);
+            }
+            if !changed {
+                break;
+            }
+        }
+        // Zhang-Suen leaves the corner cells of staircases: a cell whose
+        // two or three neighbours touch each other joins nothing they do not
+        // already join. Without them a cell with three or more neighbours
+        // is a junction, as in the graph of a one-cell-wide curve.
+        for &i in &live {
+            let p = self.ring(i).map(|j| self.cells[j]);
+            let b = p.iter().filter(|&&x| x).count();
+            if (2..=3).contains(&b) && ring_components(&p) == 1 {
+                self.cells[i] = false;
+            }
+        }
+    }
+
+    /// Set skeleton cells among the eight neighbours of cell `i`.
+    pub fn degree(&self, i: usize) -> usize {
+        self.ring(i).iter().filter(|&&j| self.cells[j]).count()
+    }
+
+    /// Image coordinates of cell `i`.
+    pub fn to_image(&self, i: usize) -> Vec2 {
+        Vec2::new(
+            (self.u0 + (i % self.w) as i64) as f64,
+            (self.v0 + (i / self.w) as i64) as f64,
+        )
+    }
+
+    /// The shape's local width at cell `i`, pixels: the diameter of the
+    /// largest disc centred there, `2 d - 1` for a distance `d` measured
+    /// between cell centres (a line `2k + 1` cells wide has `d = k + 1` on
+    /// its axis).
+    pub fn width_at(&self, i: usize) -> f64 {
+        (2.0 * f64::from(self.dist[i]) - 1.0).max(1.0)
+    }
+}
+
+/// Number of 0 -> 1 changes going once round a ring of eight neighbours
+/// (Zhang-Suen's `A`).
+fn transitions(p: &[bool; 8]) -> usize {
+    (0..8).filter(|&k| !p[k] && p[(k + 1) % 8]).count()
+}
+
+/// Number of groups the set cells of a ring form when touching cells
+/// (side or corner) are one group: neighbours in the ring touch, and so do
+/// the side neighbours N, E, S, W next to each other (N and E meet at a corner).
+fn ring_components(p: &[bool; 8]) -> usize {
+    let mut group = [0usize, 1, 2, 3, 4, 5, 6, 7];
+    fn root(g: &mut [usize; 8], mut a: usize) -> usize {
+        while g[a] != a {
+            a = g[a];
+        }
+        a
+    }
+    for k in 0..8 {
+        let touching = [(k + 1) % 8, (k + 2) % 8];
+        for (n, &j) in touching.iter().enumerate() {
+            // Two apart only from a side cell (even index) to the next side cell.
+            if n == 1 && k % 2 == 1 {
+                continue;
+            }
+            if p[k] && p[j] {
+                let (a, b) = (root(&mut group, k), root(&mut group, j));
+                group[a.max(b)] = a.min(b);
+            }
+        }
+    }
+    (0..8).filter(|&k| p[k] && root(&mut group, k) == k).count()
+}
+
+/// Exact Euclidean distance from each set cell to the nearest unset cell
+/// (Felzenszwalb and Huttenlocher's lower envelope of parabolas, by columns
+/// then rows); unset cells get 0.
+fn distance_transform(cells: &[bool], w: usize, h: usize) -> Vec<f32> {
+    let inf = ((w + h) * (w + h)) as f64;
+    let mut sq: Vec<f64> = cells.iter().map(|&c| if c { inf } else { 0.0 }).collect();
+    let n = w.max(h);
+    let mut f = vec![0.0; n];
+    let mut out = vec![0.0; n];
+    let mut hull = vec![0usize; n];
+    let mut bounds = vec![0.0; n + 1];
+    for x in 0..w {
+        for y in 0..h {
+            f[y] = sq[y * w + x];
+        }
+        envelope(&f[..h], &mut out[..h], &mut hull, &mut bounds);
+        for y in 0..h {
+            sq[y * w + x] = out[y];
+        }
+    }
+    for y in 0..h {
+        f[..w].copy_from_slice(&sq[y * w..(y + 1) * w]);
+        envelope(&f[..w], &mut out[..w], &mut hull, &mut bounds);
+        sq[y * w..(y + 1) * w].copy_from_slice(&out[..w]);
+    }
+    sq.iter().map(|&d| libm::sqrt(d) as f32).collect()
+}
+
+/// One dimension of [`distance_transform`]: `out[q] = min_p (q - p)^2 + f[p]`.
+fn envelope(f: &[f64], out: &mut [f64], hull: &mut [usize], bounds: &mut [f64]) {
+    let n = f.len();
+    if n == 0 {
+        return;
+    }
+    let mut k = 0;
+    hull[0] = 0;
+    bounds[0] = f64::NEG_INFINITY;
+    bounds[1] = f64::INFINITY;
+    let cross = |p: usize, q: usize| {
+        ((f[q] + (q * q) as f64) - (f[p] + (p * p) as f64)) / (2.0 * (q as f64 - p as f64))
+    };
+    for q in 1..n {
+        // bounds[0] is minus infinity, so the loop stops at k = 0.
+        let mut s = cross(hull[k], q);
+        while s <= bounds[k] {
+            k -= 1;
+            s = cross(hull[k], q);
+        }
+        k += 1;
+        hull[k] = q;
+        bounds[k] = s;
+        bounds[k + 1] = f64::INFINITY;
+    }
+    k = 0;
+    for (q, o) in out.iter_mut().enumerate() {
+        while bounds[k + 1] < q as f64 {
+            k += 1;
+        }
+        let p = hull[k];
+        let d = q as f64 - p as f64;
+        *o = d * d + f[p];
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn brute(cells: &[bool], w: usize, h: usize) -> Vec<f32> {
+        (0..w * h)
+            .map(|i| {
+                if !cells[i] {
+                    return 0.0;
+                }
+                let (x, y) = ((i % w) as f64, (i / w) as f64);
+                (0..w * h)
+                    .filter(|&j| !cells[j])
+                    .map(|j| {
+                        let (a, b) = ((j % w) as f64 - x, (j / w) as f64 - y);
+                        libm::sqrt(a * a + b * b)
+                    })
+                    .fold(f64::MAX, f64::min) as f32
+            })
+            .collect()
+    }
+
+    #[test]
+    fn distance_transform_is_exact_against_brute_force() {
+        let mut rng = crate::rng::SplitMix64::new(3);
+        for _ in 0..20 {
+            let (w, h) = (3 + rng.below(14) as usize, 3 + rng.below(14) as usize);
+            let mut cells: Vec<bool> = (0..w * h).map(|_| rng.uniform() < 0.8).collect();
+            cells[0] = false;
+            assert_eq!(distance_transform(&cells, w, h), brute(&cells, w, h));
+        }
+    }
+
+    #[test]
+    fn a_line_five_cells_wide_measures_five_on_its_axis() {
+        let mut mask = Mask::new(40, 20);
+        for v in 5..10 {
+            for u in 5..35 {
+                mask.data[v * 40 + u] = true;
+            }
+        }
+        let (shapes, labels) = shapes(&mask, 1);
+        assert_eq!(shapes.len(), 1);
+        assert_eq!(labels[7 * 40 + 20], 1);
+        let grid = Grid::around(&shapes[0].pixels, 40);
+        // Image (20, 7) is on the axis.
+        let i = (7 - grid.v0) as usize * grid.w + (20 - grid.u0) as usize;
+        assert_eq!(grid.width_at(i), 5.0);
+    }
+
+    #[test]
+    fn shapes_come_largest_first_and_small_ones_are_dropped() {
+        let mut mask = Mask::new(30, 10);
+        for u in 0..3 {
+            mask.data[u] = true; // 3 pixels
+        }
+        for u in 10..20 {
+            mask.data[5 * 30 + u] = true; // 10 pixels
+        }
+        mask.data[9 * 30 + 29] = true; // 1 pixel
+        let (s, labels) = shapes(&mask, 2);
+        assert_eq!(
+            s.iter().map(|s| s.pixels.len()).collect::<Vec<_>>(),
+            [10, 3]
+        );
+        assert_eq!((labels[5 * 30 + 12], labels[1], labels[299]), (1, 2, 0));
+    }
+}
