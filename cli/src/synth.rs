@@ -95,7 +95,7 @@ pub fn cmd_synth(raw: &[String]) -> Result<(), CliError> {
     }
     let seed: u64 = args.number("seed", 1)?;
     let variant = match args.value("variant") {
-        None => Variant::BASE,
+        None => kind.default_variant(),
         Some(v) => Variant::parse(v).ok_or_else(|| {
             CliError(format!(
                 "unknown variant `{v}`; `upetrack scenarios` lists them"

@@ -39,11 +39,7 @@ pub fn run_frame(
     let t1 = now_ms();
     let cloud = tracker.cloud(frame, &mask);
     let t2 = now_ms();
-    let observation = Observation {
-        mask,
-        cloud,
-        occlusions: occlusions.to_vec(),
-    };
+    let observation = Observation::new(mask, cloud, occlusions);
     let output = tracker.update(frame, &observation);
     let t3 = now_ms();
     Ok(TimedFrame {

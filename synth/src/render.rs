@@ -79,6 +79,9 @@ pub struct OccluderBox {
     pub min: Vec3,
     /// Maximum corner, metres.
     pub max: Vec3,
+    /// Its albedo, RGB in [0, 1]; `None` for the occluders' colour of the
+    /// render settings.
+    pub color: Option<[f64; 3]>,
 }
 
 /// A rendered frame.
@@ -149,7 +152,7 @@ impl RenderSettings {
 enum Surface {
     Table,
     Rope { s: f64, n: Vec3, axis: Vec3 },
-    Box { n: Vec3 },
+    Box { n: Vec3, albedo: [f64; 3] },
 }
 
 /// Ray (origin 0, unit direction `rd`) against the capsule `a`-`b` of radius `r`.
@@ -379,7 +382,10 @@ pub fn render(
                     let k = v * w + u;
                     if t < dist[k] {
                         dist[k] = t;
-                        surf[k] = Surface::Box { n };
+                        surf[k] = Surface::Box {
+                            n,
+                            albedo: bx.color.unwrap_or(settings.occluder_color),
+                        };
                     }
                 }
             }
@@ -433,7 +439,7 @@ pub fn render(
                     let t = 0.78 + 0.22 * libm::cos(phase);
                     (settings.rope_color, n.dot(&light).max(0.0), t)
                 }
-                Surface::Box { n } => (settings.occluder_color, n.dot(&light).abs(), 1.0),
+                Surface::Box { n, albedo } => (albedo, n.dot(&light).abs(), 1.0),
             };
             let lambert = lambert.min(1.0);
             let r2 = ((u as f64 - cam.cx) * (u as f64 - cam.cx)

@@ -12,6 +12,7 @@ use upetrack::{CameraIntrinsics, HsvRange, Rect};
 
 use crate::render::{hidden_by_boxes, render, OccluderBox, RenderSettings};
 use crate::rope::{Rope, RopeSettings};
+use crate::variant::Variant;
 
 /// Frames of physics run before recording starts.
 pub const SETTLING_FRAMES: usize = 45;
@@ -51,11 +52,19 @@ pub enum ScenarioKind {
     BoxOverEnd,
     /// The same box over the middle of the rope.
     BoxOverMiddle,
+    /// A thin black cable in several bends on a desk beside dark flat
+    /// things (a phone, a pen, a USB stick) that pass the same colour range.
+    CableDesk,
+    /// A rope lying in a loop that crosses over itself, one tail pulled.
+    CrossingLoop,
+    /// A rope under two strips (a ruler and a pen) lying across it: its
+    /// mask is in three pieces.
+    InPieces,
 }
 
 impl ScenarioKind {
     /// One of each scenario (the sweep at 30 %).
-    pub const EXAMPLES: [Self; 9] = [
+    pub const EXAMPLES: [Self; 12] = [
         Self::StaticS,
         Self::DynamicPull,
         Self::TipDrag,
@@ -65,10 +74,13 @@ impl ScenarioKind {
         Self::GripperSwing,
         Self::BoxOverEnd,
         Self::BoxOverMiddle,
+        Self::CableDesk,
+        Self::CrossingLoop,
+        Self::InPieces,
     ];
 
     /// Every scenario's command-line name.
-    pub const NAMES: [&'static str; 9] = [
+    pub const NAMES: [&'static str; 12] = [
         "static-s",
         "dynamic-pull",
         "tip-drag",
@@ -78,6 +90,9 @@ impl ScenarioKind {
         "gripper-swing",
         "box-over-end",
         "box-over-middle",
+        "cable-desk",
+        "crossing-loop",
+        "in-pieces",
     ];
 
     /// Largest share of the rope a sweep may hide, percent.
@@ -94,6 +109,9 @@ impl ScenarioKind {
             "gripper-swing" => Self::GripperSwing,
             "box-over-end" => Self::BoxOverEnd,
             "box-over-middle" => Self::BoxOverMiddle,
+            "cable-desk" => Self::CableDesk,
+            "crossing-loop" => Self::CrossingLoop,
+            "in-pieces" => Self::InPieces,
             other => {
                 let k: u8 = other.strip_prefix("sweep-")?.parse().ok()?;
                 if !(10..=Self::MAX_SWEEP_PERCENT).contains(&k) {
@@ -116,6 +134,9 @@ impl ScenarioKind {
             Self::GripperSwing => "gripper-swing".into(),
             Self::BoxOverEnd => "box-over-end".into(),
             Self::BoxOverMiddle => "box-over-middle".into(),
+            Self::CableDesk => "cable-desk".into(),
+            Self::CrossingLoop => "crossing-loop".into(),
+            Self::InPieces => "in-pieces".into(),
         }
     }
 
@@ -131,6 +152,18 @@ impl ScenarioKind {
             Self::GripperSwing => "a gripper comes down on one end, lifts it 10 cm and swings it in a circle; its palm and arm hide the held end in depth",
             Self::BoxOverEnd => "a box travels 6-10 cm above the table over one end (an occluder in depth, no rectangle) while the other end is dragged 10 cm",
             Self::BoxOverMiddle => "a box travels 6-10 cm above the table over the middle of the rope while one end is dragged 10 cm",
+            Self::CableDesk => "a thin black cable in several bends on a desk beside a black phone, a pen and a USB stick, all in a black colour range; one end dragged 8 cm",
+            Self::CrossingLoop => "a rope lying in a loop that crosses over itself (the upper strand resting on the lower); one tail pulled 6 cm, tightening the loop",
+            Self::InPieces => "a rope under a ruler and a pen lying across it (its mask in three pieces) while one end is dragged 10 cm",
+        }
+    }
+
+    /// The scene variant this scenario is seen in when none is asked for:
+    /// the black cable's own for `cable-desk`, else the base variant.
+    pub fn default_variant(&self) -> Variant {
+        match self {
+            Self::CableDesk => Variant::DESK_BLACK_CABLE,
+            _ => Variant::BASE,
         }
     }
 }
@@ -272,9 +305,85 @@ fn arc_shape() -> Vec<Vec3> {
         .collect()
 }
 
+/// A cable laid in several bends: two periods of a sine, about 1 m long.
+fn bends_shape() -> Vec<Vec3> {
+    (0..400)
+        .map(|i| {
+            let t = i as f64 / 399.0;
+            Vec3::new(
+                -0.16 + 0.36 * t,
+                0.115 * libm::sin(core::f64::consts::TAU * 2.0 * t),
+                0.0,
+            )
+        })
+        .collect()
+}
+
+/// A loop crossing itself: the nodal cubic `y^2 = x^2 (x + 1)` (crossing at
+/// the origin at right angles), tails to +x.
+fn loop_shape() -> Vec<Vec3> {
+    (0..400)
+        .map(|i| {
+            let t = -1.35 + 2.7 * i as f64 / 399.0;
+            Vec3::new(0.1 - 0.15 * (t * t - 1.0), 0.15 * t * (t * t - 1.0), 0.0)
+        })
+        .collect()
+}
+
+/// A flat object lying on the table, corners `(x0, y0)` and `(x1, y1)`, `h` high.
+fn lying(x0: f64, y0: f64, x1: f64, y1: f64, h: f64, color: [f64; 3]) -> OccluderBox {
+    OccluderBox {
+        min: Vec3::new(x0, y0, 0.0),
+        max: Vec3::new(x1, y1, h),
+        color: Some(color),
+    }
+}
+
 fn smoothstep(x: f64) -> f64 {
     let x = x.clamp(0.0, 1.0);
     x * x * (3.0 - 2.0 * x)
+}
+
+/// A box that stays where it is for the whole scene.
+fn still(shape: OccluderBox, frames: usize) -> MovingBox {
+    MovingBox {
+        first: 0,
+        last: frames - 1,
+        shape,
+        path: BoxPath::Linear {
+            travel: Vec3::zeros(),
+            bob: 0.0,
+            dwell: false,
+        },
+    }
+}
+
+/// Lays the loop's second crossing strand over the first: the particles
+/// of the later strand within a few thicknesses of the crossing are raised
+/// by a thickness (with a smooth bump), so that settling leaves them
+/// resting on the strand underneath instead of pushing it aside.
+fn lift_upper_strand(rope: &mut Rope) {
+    let n = rope.x.len();
+    let t = rope.settings.thickness;
+    // The crossing: the closest pair of particles far apart along the rope.
+    let mut best = (f64::MAX, 0, 0);
+    for i in 0..n {
+        for j in i + n / 4..n {
+            let d = upetrack::math::norm(&(rope.x[j] - rope.x[i]));
+            if d < best.0 {
+                best = (d, i, j);
+            }
+        }
+    }
+    let (_, _, upper) = best;
+    let spacing = rope.settings.length / (n - 1) as f64;
+    let reach = 4.0 * t;
+    for (k, p) in rope.x.iter_mut().enumerate() {
+        let s = (k as f64 - upper as f64) * spacing / reach;
+        if s.abs() < 1.0 {
+            p.z += t * (0.5 + 0.5 * libm::cos(core::f64::consts::PI * s));
+        }
+    }
 }
 
 impl Scenario {
@@ -317,6 +426,8 @@ impl Scenario {
             ScenarioKind::StaticS
             | ScenarioKind::DynamicPull
             | ScenarioKind::OcclusionSweep { .. } => s_shape(),
+            ScenarioKind::CableDesk => bends_shape(),
+            ScenarioKind::CrossingLoop => loop_shape(),
             _ => arc_shape(),
         };
         // Small seeded variation of the layout: a rotation and a shift.
@@ -328,6 +439,9 @@ impl Scenario {
             .map(|p| Vec3::new(c * p.x - s * p.y, s * p.x + c * p.y, 0.0) + shift)
             .collect();
         let mut rope = Rope::laid_along(&shape, rope_settings);
+        if kind == ScenarioKind::CrossingLoop {
+            lift_upper_strand(&mut rope);
+        }
         for _ in 0..SETTLING_FRAMES {
             rope.step(1.0 / 30.0);
         }
@@ -387,6 +501,7 @@ impl Scenario {
                     shape: OccluderBox {
                         min: Vec3::new(-0.45, y0 - 0.04, 0.20),
                         max: Vec3::new(-0.40, y0 + 0.04, 0.22),
+                        color: None,
                     },
                     path: BoxPath::Linear {
                         travel: Vec3::new(0.75, 0.0, 0.0),
@@ -412,14 +527,17 @@ impl Scenario {
                     OccluderBox {
                         min: Vec3::new(-0.035, -0.035, r + 0.005),
                         max: Vec3::new(0.035, 0.035, r + 0.025),
+                        color: None,
                     },
                     OccluderBox {
                         min: Vec3::new(-0.02, -0.02, r + 0.025),
                         max: Vec3::new(0.02, 0.02, 0.20),
+                        color: None,
                     },
                     OccluderBox {
                         min: Vec3::new(-0.02, -0.02, 0.18),
                         max: Vec3::new(0.02, 0.28, 0.22),
+                        color: None,
                     },
                 ] {
                     boxes.push(MovingBox {
@@ -461,6 +579,7 @@ impl Scenario {
                     shape: OccluderBox {
                         min: Vec3::new(target.x - 0.05, target.y - 0.25, 0.06),
                         max: Vec3::new(target.x + 0.05, target.y - 0.15, 0.09),
+                        color: None,
                     },
                     path: BoxPath::Linear {
                         travel: Vec3::new(0.0, 0.40, 0.0),
@@ -468,6 +587,57 @@ impl Scenario {
                         dwell: true,
                     },
                 });
+            }
+            ScenarioKind::CableDesk => {
+                pulls.push(Pull {
+                    particle: last,
+                    start: at(0.35),
+                    end: at(0.9),
+                    offset: Vec3::new(0.05, -0.06, 0.0),
+                    circular: false,
+                });
+                // A phone 3 cm from the cable's first end, a pen below it,
+                // a USB stick 3 cm below the cable's first trough: all
+                // nearly black.
+                for shape in [
+                    lying(-0.26, -0.03, -0.19, 0.115, 0.008, [0.025, 0.025, 0.03]),
+                    lying(-0.215, -0.21, -0.205, -0.07, 0.009, [0.05, 0.05, 0.10]),
+                    lying(-0.05, -0.165, 0.0, -0.147, 0.008, [0.06, 0.06, 0.06]),
+                ] {
+                    boxes.push(still(shape, frames));
+                }
+            }
+            ScenarioKind::CrossingLoop => {
+                pulls.push(Pull {
+                    particle: last,
+                    start: at(0.35),
+                    end: at(0.9),
+                    offset: Vec3::new(0.06, 0.0, 0.0),
+                    circular: false,
+                });
+            }
+            ScenarioKind::InPieces => {
+                pulls.push(Pull {
+                    particle: last,
+                    start: at(0.35),
+                    end: at(0.9),
+                    offset: Vec3::new(0.04, 0.09, 0.0),
+                    circular: false,
+                });
+                // A ruler 3 cm wide and a pen 1.2 cm wide across the rope,
+                // resting just above it.
+                let h = rope.settings.thickness;
+                for (x, w, top, color) in [
+                    (-0.08, 0.03, 0.004, [0.90, 0.88, 0.78]),
+                    (0.10, 0.012, 0.012, [0.10, 0.10, 0.10]),
+                ] {
+                    let shape = OccluderBox {
+                        min: Vec3::new(x - 0.5 * w, -0.25, h + 0.001),
+                        max: Vec3::new(x + 0.5 * w, 0.25, h + 0.001 + top),
+                        color: Some(color),
+                    };
+                    boxes.push(still(shape, frames));
+                }
             }
             ScenarioKind::FastPull => {
                 pulls.push(Pull {
@@ -539,10 +709,17 @@ impl Scenario {
     }
 
     /// HSV thresholds that fit the rope's colour in OpenCV's convention:
-    /// its hue +-15, saturation from 60 % of its own, any value above 20.
+    /// its hue +-15, saturation from 60 % of its own, any value above 20;
+    /// for a black, grey or white rope, the range clicking it picks
+    /// ([`HsvRange::around`]).
     pub fn hsv(&self) -> HsvRange {
         let c = self.render.rope_color;
-        let [h, s, _] = rgb_to_hsv(c.map(|x| libm::round(x * 255.0).clamp(0.0, 255.0) as u8));
+        let rgb = c.map(|x| libm::round(x * 255.0).clamp(0.0, 255.0) as u8);
+        let [h, s, v] = rgb_to_hsv(rgb);
+        if HsvRange::is_achromatic([h, s, v]) {
+            // Black, grey or white: the range a user picks by clicking it.
+            return HsvRange::around(rgb);
+        }
         let lo = (h as i32 - 15).rem_euclid(180) as u8;
         let hi = (h as i32 + 15).rem_euclid(180) as u8;
         HsvRange {
@@ -613,6 +790,7 @@ impl Scenario {
                     OccluderBox {
                         min: b.shape.min + travel * along + lift,
                         max: b.shape.max + travel * along + lift,
+                        color: b.shape.color,
                     }
                 }
                 BoxPath::Gripper {
@@ -631,6 +809,7 @@ impl Scenario {
                     OccluderBox {
                         min: b.shape.min + at,
                         max: b.shape.max + at,
+                        color: b.shape.color,
                     }
                 }
             })

@@ -56,8 +56,23 @@ impl Variant {
         table_color: [0.86, 0.87, 0.85],
     };
 
+    /// The black cable of `cable-desk`: 640x480, tilted 15 degrees, 0.55 m,
+    /// a 5 mm black cable 1 m long on a light wooden desk.
+    pub const DESK_BLACK_CABLE: Self = Self {
+        name: "desk-black-cable",
+        description:
+            "640x480, tilted 15 degrees, 0.55 m, a 5 mm black cable 1 m long on a light wooden desk",
+        hd: false,
+        tilt_degrees: 15.0,
+        distance: 0.55,
+        rope_diameter: 0.005,
+        rope_length: 1.0,
+        rope_color: [0.035, 0.035, 0.04],
+        table_color: [0.80, 0.68, 0.50],
+    };
+
     /// Every variant, the base first.
-    pub const ALL: [Self; 5] = [
+    pub const ALL: [Self; 6] = [
         Self::BASE,
         Self {
             name: "hd-tilted-red",
@@ -105,6 +120,7 @@ impl Variant {
             rope_color: [0.06, 0.12, 0.45],
             table_color: [0.92, 0.92, 0.90],
         },
+        Self::DESK_BLACK_CABLE,
     ];
 
     /// The variant called `name`.

@@ -117,7 +117,7 @@ impl SynthScene {
             )));
         }
         let variant = match &o.variant {
-            None => Variant::BASE,
+            None => kind.default_variant(),
             Some(name) => Variant::parse(name)
                 .ok_or_else(|| JsError::new(&format!("no scene variant named `{name}`")))?,
         };

@@ -17,10 +17,22 @@ pub const PICK_HUE_HALF_WIDTH: u8 = 12;
 pub const PICK_SATURATION_BELOW: u8 = 70;
 /// How far below the clicked value the picked range reaches (shadows).
 pub const PICK_VALUE_BELOW: u8 = 90;
-/// Lowest saturation a picked range starts at: greys never pass.
+/// Lowest saturation a picked coloured range starts at: greys never pass.
 pub const PICK_MIN_SATURATION: u8 = 40;
-/// Lowest value a picked range starts at: black never passes.
+/// Lowest value a picked coloured range starts at: black never passes.
 pub const PICK_MIN_VALUE: u8 = 20;
+/// A clicked pixel darker than this (value) is black: its hue and
+/// saturation are the camera's noise (a channel of 10 +- 3 swings the
+/// saturation over the whole range), so the range takes any hue and any
+/// saturation up to a value a little above the pixel's.
+pub const PICK_DARK_VALUE: u8 = 64;
+/// How far above the clicked value a black range reaches (highlights).
+pub const PICK_DARK_VALUE_ABOVE: u8 = 48;
+/// A clicked pixel less saturated than this is grey or white: any hue,
+/// saturation up to a margin above the pixel's.
+pub const PICK_GREY_SATURATION: u8 = 40;
+/// How far above the clicked saturation a grey range reaches.
+pub const PICK_GREY_SATURATION_ABOVE: u8 = 40;
 
 /// Errors in segmentation settings.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -84,11 +96,34 @@ impl HsvRange {
         Ok(())
     }
 
-    /// The range picked around one clicked pixel's colour: its hue
-    /// `+-PICK_HUE_HALF_WIDTH` (wrapping through 0), saturation and value
-    /// from a margin below the pixel's up to 255, never down to grey or black.
+    /// `true` for a colour without a hue worth trusting: black (value
+    /// below [`PICK_DARK_VALUE`]) or grey and white (saturation below
+    /// [`PICK_GREY_SATURATION`]).
+    pub fn is_achromatic(hsv: [u8; 3]) -> bool {
+        hsv[2] < PICK_DARK_VALUE || hsv[1] < PICK_GREY_SATURATION
+    }
+
+    /// The range picked around one clicked pixel's colour. A coloured
+    /// pixel: its hue `+-PICK_HUE_HALF_WIDTH` (wrapping through 0),
+    /// saturation and value from a margin below the pixel's up to 255,
+    /// never down to grey or black. A black pixel: any hue and saturation,
+    /// value up to [`PICK_DARK_VALUE_ABOVE`] above its own. A grey or white
+    /// one: any hue, saturation up to [`PICK_GREY_SATURATION_ABOVE`] above
+    /// its own, value from [`PICK_VALUE_BELOW`] below its own.
     pub fn around(rgb: [u8; 3]) -> Self {
         let [h, s, v] = rgb_to_hsv(rgb);
+        if v < PICK_DARK_VALUE {
+            return Self {
+                lower: [0, 0, 0],
+                upper: [HUE_MAX, 255, v.saturating_add(PICK_DARK_VALUE_ABOVE)],
+            };
+        }
+        if s < PICK_GREY_SATURATION {
+            return Self {
+                lower: [0, 0, v.saturating_sub(PICK_VALUE_BELOW)],
+                upper: [HUE_MAX, s.saturating_add(PICK_GREY_SATURATION_ABOVE), 255],
+            };
+        }
         let hues = u16::from(HUE_MAX) + 1;
         let lower_h = (u16::from(h) + hues - u16::from(PICK_HUE_HALF_WIDTH)) % hues;
         let upper_h = (u16::from(h) + u16::from(PICK_HUE_HALF_WIDTH)) % hues;
@@ -396,6 +431,100 @@ pub fn segment(frame: &Frame<'_>, range: &HsvRange, occlusions: &[Rect]) -> Mask
     mask
 }
 
+/// A disc of the image: a place, how far from it a shape may lie, and how
+/// wide the shape may be.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Reach {
+    /// Centre, image pixels.
+    pub centre: [f64; 2],
+    /// Radius, pixels.
+    pub radius: f64,
+    /// Widest mean width of a shape found from here, pixels (twice its
+    /// area over its perimeter: a strip's width).
+    pub max_width: f64,
+}
+
+/// The shapes of `mask` (8-connected) with a pixel within one of `reaches`
+/// and a mean width within its `max_width`, and how many of `mask`'s
+/// pixels lie in the other shapes.
+pub fn shapes_within(mask: &Mask, reaches: &[Reach]) -> (Mask, usize) {
+    const UNSEEN: u8 = 0;
+    const KEPT: u8 = 1;
+    const WIDE: u8 = 2;
+    let (w, h) = (mask.width as i64, mask.height as i64);
+    let mut state = vec![UNSEEN; mask.data.len()];
+    let mut shape = Vec::new();
+    for r in reaches {
+        if !(r.radius >= 0.0) || !r.centre.iter().all(|c| c.is_finite()) {
+            continue;
+        }
+        let rad = r.radius.min((w + h) as f64);
+        let (u0, u1) = (
+            libm::floor(r.centre[0] - rad).max(0.0) as i64,
+            libm::ceil(r.centre[0] + rad).min((w - 1) as f64) as i64,
+        );
+        let (v0, v1) = (
+            libm::floor(r.centre[1] - rad).max(0.0) as i64,
+            libm::ceil(r.centre[1] + rad).min((h - 1) as f64) as i64,
+        );
+        for v in v0..=v1 {
+            for u in u0..=u1 {
+                let i = (v * w + u) as usize;
+                if !mask.data[i] || state[i] != UNSEEN {
+                    continue;
+                }
+                let (du, dv) = (u as f64 - r.centre[0], v as f64 - r.centre[1]);
+                if du * du + dv * dv > rad * rad {
+                    continue;
+                }
+                // The whole shape, and its boundary (pixels with a side
+                // off the mask).
+                shape.clear();
+                state[i] = KEPT;
+                shape.push(i);
+                let mut k = 0;
+                let mut boundary = 0usize;
+                while k < shape.len() {
+                    let j = shape[k];
+                    k += 1;
+                    let (ju, jv) = ((j as i64) % w, (j as i64) / w);
+                    let mut edge = false;
+                    for dv in -1..=1 {
+                        for du in -1..=1 {
+                            let (nu, nv) = (ju + du, jv + dv);
+                            let inside = nu >= 0 && nv >= 0 && nu < w && nv < h;
+                            let set = inside && mask.data[(nv * w + nu) as usize];
+                            if !set && (du == 0 || dv == 0) {
+                                edge = true;
+                            }
+                            if set {
+                                let n = (nv * w + nu) as usize;
+                                if state[n] == UNSEEN {
+                                    state[n] = KEPT;
+                                    shape.push(n);
+                                }
+                            }
+                        }
+                    }
+                    boundary += usize::from(edge);
+                }
+                let width = 2.0 * shape.len() as f64 / boundary.max(1) as f64;
+                if !(width <= r.max_width) {
+                    for &j in &shape {
+                        state[j] = WIDE;
+                    }
+                }
+            }
+        }
+    }
+    let mut kept = Mask::new(mask.width, mask.height);
+    for (k, s) in kept.data.iter_mut().zip(&state) {
+        *k = *s == KEPT;
+    }
+    let unclaimed = mask.count() - kept.count();
+    (kept, unclaimed)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -616,8 +745,11 @@ mod tests {
             let r = HsvRange::around(rgb);
             assert!(r.validate().is_ok(), "{rgb:?}");
             let hsv = rgb_to_hsv(rgb);
-            let passes = hsv[1] >= PICK_MIN_SATURATION && hsv[2] >= PICK_MIN_VALUE;
-            assert_eq!(r.contains(hsv), passes, "{rgb:?} {hsv:?} {r:?}");
+            assert!(r.contains(hsv), "{rgb:?} {hsv:?} {r:?}");
+            // Coloured picks never reach grey or black.
+            if !HsvRange::is_achromatic(hsv) {
+                assert!(r.lower[1] >= PICK_MIN_SATURATION && r.lower[2] >= PICK_MIN_VALUE);
+            }
         }
         // Pure red has hue 0: the range wraps from 168 to 12.
         let r = HsvRange::around([255, 0, 0]);
@@ -625,6 +757,60 @@ mod tests {
         // Blue (S 229, V 200): saturation and value reach 70 and 90 below.
         assert_eq!(rgb_to_hsv([20, 60, 200])[1..], [229, 200]);
         assert_eq!(HsvRange::around([20, 60, 200]).lower[1..], [159, 110]);
+    }
+
+    /// A black cable's pixels are dark with a hue and saturation that
+    /// swing with the camera's noise: the range picked on one of them takes
+    /// the others whatever their hue, and not a light desk or a coloured
+    /// rope; one picked on grey takes no saturated colour.
+    #[test]
+    fn a_dark_or_grey_click_picks_an_achromatic_range() {
+        let black = HsvRange::around([9, 10, 8]);
+        for px in [[9, 10, 8], [14, 9, 6], [6, 6, 13], [0, 0, 0], [30, 28, 33]] {
+            assert!(black.contains(rgb_to_hsv(px)), "{px:?} {black:?}");
+        }
+        for px in [[200, 170, 120], [128, 128, 128], [20, 60, 200]] {
+            assert!(!black.contains(rgb_to_hsv(px)), "{px:?} {black:?}");
+        }
+        let grey = HsvRange::around([150, 150, 146]);
+        assert!(grey.contains(rgb_to_hsv([120, 118, 122])));
+        assert!(!grey.contains(rgb_to_hsv([200, 60, 40])));
+        assert!(!grey.contains(rgb_to_hsv([20, 20, 20])));
+    }
+
+    #[test]
+    fn only_shapes_within_reach_are_kept() {
+        let mut mask = Mask::new(40, 20);
+        for u in 2..30 {
+            mask.data[5 * 40 + u] = true; // a line, 28 px
+        }
+        for v in 12..16 {
+            for u in 30..36 {
+                mask.data[v * 40 + u] = true; // a block, 24 px
+            }
+        }
+        let reach = |u: f64, r: f64| Reach {
+            centre: [u, 8.0],
+            radius: r,
+            max_width: 8.0,
+        };
+        // 3 px from the line's pixel (10, 5): the whole line, not the block.
+        let (kept, unclaimed) = shapes_within(&mask, &[reach(10.0, 3.0)]);
+        assert_eq!((kept.count(), unclaimed), (28, 24));
+        assert!(kept.get(29, 5) && !kept.get(31, 13));
+        let (_, unclaimed) = shapes_within(&mask, &[reach(10.0, 2.9)]);
+        assert_eq!(unclaimed, 52);
+        let (kept, _) = shapes_within(&mask, &[reach(10.0, 3.0), reach(33.0, 4.0)]);
+        assert_eq!(kept, mask);
+        let (_, unclaimed) = shapes_within(&mask, &[reach(f64::NAN, 3.0), reach(10.0, -1.0)]);
+        assert_eq!(unclaimed, 52);
+        // The block (6 x 4: mean width 2 x 24 / 16 = 3) is too wide for 2.5.
+        let narrow = Reach {
+            max_width: 2.5,
+            ..reach(33.0, 4.0)
+        };
+        let (kept, unclaimed) = shapes_within(&mask, &[reach(10.0, 3.0), narrow]);
+        assert_eq!((kept.count(), unclaimed), (28, 24));
     }
 
     #[test]

@@ -12,10 +12,13 @@ use crate::perception::camera::{CameraError, CameraIntrinsics};
 use crate::perception::evidence::Evidence;
 use crate::perception::frame::{Frame, FrameError};
 use crate::perception::initialisation::{
-    initialise, InitError, InitGuide, InitReport, PriorError, RopePrior,
+    initialise, InitError, InitGuide, InitReport, Initialisation, PriorError, RopePrior,
+    DIAMETER_PRIOR_FACTOR,
 };
 use crate::perception::point_cloud::build_cloud;
-use crate::perception::segmentation::{segment, HsvRange, Mask, Rect, SegmentationError};
+use crate::perception::segmentation::{
+    segment, shapes_within, HsvRange, Mask, Reach, Rect, SegmentationError,
+};
 use crate::polyline::{polyline_length, resample_uniform};
 use crate::step::{Algorithm, StepInput};
 use crate::upe::explain::StepExplanation;
@@ -133,10 +136,37 @@ impl FrameOutput {
 pub struct Observation {
     /// The rope mask after occlusion rectangles.
     pub mask: Mask,
-    /// The downsampled cloud on the rope's centre line, metres.
+    /// The downsampled cloud on the rope's centre line, metres: of the
+    /// mask's shapes within reach of the tracked rope (all of them when
+    /// there is no tracked rope).
     pub cloud: Vec<Vec3>,
     /// The occlusion rectangles blacked out in this frame.
     pub occlusions: Vec<Rect>,
+    /// Mask pixels in shapes out of the tracked rope's reach, left out of
+    /// `cloud` (0 when there is no tracked rope).
+    pub unclaimed: usize,
+}
+
+impl Observation {
+    /// An observation from [`Tracker::segment`]'s mask and
+    /// [`Tracker::cloud`]'s cloud of it.
+    pub fn new(mask: Mask, cloud: RopeCloud, occlusions: &[Rect]) -> Self {
+        Self {
+            mask,
+            cloud: cloud.points,
+            occlusions: occlusions.to_vec(),
+            unclaimed: cloud.unclaimed,
+        }
+    }
+}
+
+/// The cloud of the shapes of a mask within reach of the tracked rope.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RopeCloud {
+    /// Points, metres.
+    pub points: Vec<Vec3>,
+    /// Mask pixels in shapes out of reach, whose points were left out.
+    pub unclaimed: usize,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -159,6 +189,8 @@ pub struct TrackerSnapshot {
     rest_length: Option<f64>,
     #[cfg_attr(feature = "serde", serde(default))]
     refused_jump_cloud: Option<usize>,
+    #[cfg_attr(feature = "serde", serde(default))]
+    unclaimed_known: Option<usize>,
     stepper: Stepper,
 }
 
@@ -179,6 +211,9 @@ pub struct Tracker {
     /// Cloud size at the last refused jump re-initialisation, while fewer
     /// than `reinit_visible_fraction` of the nodes stay visible.
     refused_jump_cloud: Option<usize>,
+    /// Unclaimed mask pixels when a re-initialisation last found the rope
+    /// where it was tracked (those shapes are not the rope).
+    unclaimed_known: Option<usize>,
     /// The per-frame step of `params.algorithm`.
     stepper: Stepper,
     /// What the user knows of the rope.
@@ -206,6 +241,7 @@ impl Tracker {
             known_radius: None,
             rest_length: None,
             refused_jump_cloud: None,
+            unclaimed_known: None,
             stepper: Stepper::new(params.algorithm),
             prior: RopePrior::default(),
             hint: None,
@@ -292,6 +328,7 @@ impl Tracker {
             known_radius: self.known_radius,
             rest_length: self.rest_length,
             refused_jump_cloud: self.refused_jump_cloud,
+            unclaimed_known: self.unclaimed_known,
             stepper: self.stepper.clone(),
         }
     }
@@ -312,6 +349,7 @@ impl Tracker {
         self.known_radius = snapshot.known_radius;
         self.rest_length = snapshot.rest_length;
         self.refused_jump_cloud = snapshot.refused_jump_cloud;
+        self.unclaimed_known = snapshot.unclaimed_known;
         self.stepper = snapshot.stepper;
         if restart {
             self.stepper = Stepper::new(self.params.algorithm);
@@ -327,6 +365,7 @@ impl Tracker {
         self.known_radius = None;
         self.rest_length = None;
         self.refused_jump_cloud = None;
+        self.unclaimed_known = None;
         self.stepper = Stepper::new(self.params.algorithm);
     }
 
@@ -338,11 +377,7 @@ impl Tracker {
     ) -> Result<Observation, TrackerError> {
         let mask = self.segment(frame, occlusions)?;
         let cloud = self.cloud(frame, &mask);
-        Ok(Observation {
-            mask,
-            cloud,
-            occlusions: occlusions.to_vec(),
-        })
+        Ok(Observation::new(mask, cloud, occlusions))
     }
 
     /// The first stage of [`Tracker::observe`]: the rope's mask, with the
@@ -354,8 +389,44 @@ impl Tracker {
 
     /// The second stage of [`Tracker::observe`]: the point cloud of the
     /// masked pixels (`mask` from [`Tracker::segment`] on the same frame).
-    pub fn cloud(&self, frame: &Frame<'_>, mask: &Mask) -> Vec<Vec3> {
-        build_cloud(frame, mask, &self.camera, &self.cloud_settings())
+    /// While a rope is tracked, only the mask's shapes within
+    /// [`UNEXPLAINED_REACH`] visibility radii of one of its nodes, and no
+    /// wider on average than [`DIAMETER_PRIOR_FACTOR`] times the rope, are
+    /// the rope's: another shape is something else in the colour range (a
+    /// phone beside a black cable), and its pixels are counted as
+    /// unclaimed instead.
+    pub fn cloud(&self, frame: &Frame<'_>, mask: &Mask) -> RopeCloud {
+        let settings = self.cloud_settings();
+        let nodes = match &self.state {
+            Some(s) if !s.lost => s.nodes.as_slice(),
+            _ => &[],
+        };
+        let reach = UNEXPLAINED_REACH * self.params.visibility_radius;
+        let f = self.camera.fx.max(self.camera.fy);
+        let widest = DIAMETER_PRIOR_FACTOR * 2.0 * self.radius();
+        let reaches: Vec<Reach> = nodes
+            .iter()
+            .filter_map(|n| {
+                let p = self.camera.project(n)?;
+                Some(Reach {
+                    centre: [p.x, p.y],
+                    radius: reach * f / n.z,
+                    max_width: widest * f / n.z,
+                })
+            })
+            .collect();
+        if reaches.is_empty() {
+            return RopeCloud {
+                points: build_cloud(frame, mask, &self.camera, &settings),
+                unclaimed: 0,
+            };
+        }
+        let (rope, unclaimed) = shapes_within(mask, &reaches);
+        let source = if unclaimed == 0 { mask } else { &rope };
+        RopeCloud {
+            points: build_cloud(frame, source, &self.camera, &settings),
+            unclaimed,
+        }
     }
 
     /// The rope's radius in force, metres: half the prior's diameter when
@@ -413,10 +484,20 @@ impl Tracker {
         let camera = self.camera;
         let input = self.step_input(&camera, frame, obs, &prev, &classes);
         let out = self.stepper.step(&input, &self.params);
-        if self.contradicts_evidence(&out.nodes, &obs.cloud, &out.report) {
-            if let Ok(mut again) = self.try_initialise(frame, obs) {
-                again.status = FrameStatus::Recovered;
-                return again;
+        let verdict = self.contradiction(&out.nodes, obs, &out.report);
+        if verdict != Contradiction::None {
+            if let Ok(init) = self.find_rope(frame, obs) {
+                // Shapes out of reach that are not the rope: initialisation
+                // finds the rope where it is tracked. They are not asked
+                // about again until they grow.
+                let same = mean_distance(&init.nodes, &out.nodes) < self.params.visibility_radius;
+                if verdict == Contradiction::Unclaimed && same {
+                    self.unclaimed_known = Some(obs.unclaimed);
+                } else {
+                    let mut again = self.adopt(init, frame, obs);
+                    again.status = FrameStatus::Recovered;
+                    return again;
+                }
             }
         }
         self.state = Some(TrackState {
@@ -473,11 +554,20 @@ impl Tracker {
         }
     }
 
-    /// `true` when the nodes after a step cannot be the rope in these
-    /// images: the rope stretched past [`STRETCH_LIMIT`] of its length,
-    /// most hidden nodes left in free space, or more than
-    /// [`UNEXPLAINED_LIMIT`] of the cloud far from every node.
-    fn contradicts_evidence(&self, nodes: &[Vec3], cloud: &[Vec3], report: &StepReports) -> bool {
+    /// Why the nodes after a step cannot be the rope in these images: the
+    /// rope stretched past [`STRETCH_LIMIT`] of its length, most hidden
+    /// nodes left in free space, more than [`UNEXPLAINED_LIMIT`] of the
+    /// cloud far from every node, or more than that share of the mask in
+    /// shapes out of the rope's reach (unless a re-initialisation found
+    /// them not to be the rope, and they have not grown by
+    /// [`JUMP_RETRY_GROWTH`] since).
+    fn contradiction(
+        &self,
+        nodes: &[Vec3],
+        obs: &Observation,
+        report: &StepReports,
+    ) -> Contradiction {
+        let cloud = &obs.cloud;
         let stretched = self
             .rest_length
             .is_some_and(|l| polyline_length(nodes) > STRETCH_LIMIT * l);
@@ -494,7 +584,19 @@ impl Tracker {
             })
             .count();
         let unexplained = !cloud.is_empty() && far as f64 > UNEXPLAINED_LIMIT * cloud.len() as f64;
-        stretched || in_free_space || unexplained
+        if stretched || in_free_space || unexplained {
+            return Contradiction::Images;
+        }
+        let segmented = obs.mask.count().max(1) as f64;
+        let unclaimed = obs.unclaimed as f64 > UNEXPLAINED_LIMIT * segmented;
+        let known = self
+            .unclaimed_known
+            .is_some_and(|n| obs.unclaimed as f64 <= n as f64 * (1.0 + JUMP_RETRY_GROWTH));
+        if unclaimed && !known {
+            Contradiction::Unclaimed
+        } else {
+            Contradiction::None
+        }
     }
 
     /// [`Tracker::observe`] then [`Tracker::update`].
@@ -512,8 +614,18 @@ impl Tracker {
         frame: &Frame<'_>,
         obs: &Observation,
     ) -> Result<FrameOutput, ReinitFailure> {
-        // After a loss, the candidate nearest the last known state, among
-        // those long enough to be taken.
+        let init = self.find_rope(frame, obs)?;
+        Ok(self.adopt(init, frame, obs))
+    }
+
+    /// Initialisation on this frame, judged against the rope's known
+    /// length; after a loss, the candidate nearest the last known state
+    /// among those long enough to be taken.
+    fn find_rope(
+        &self,
+        frame: &Frame<'_>,
+        obs: &Observation,
+    ) -> Result<Initialisation, ReinitFailure> {
         let known = self.known_length.or(self.prior.length);
         let previous = match &self.state {
             Some(s) => s.nodes.as_slice(),
@@ -535,6 +647,11 @@ impl Tracker {
                 });
             }
         }
+        Ok(init)
+    }
+
+    /// Takes `init` as the state.
+    fn adopt(&mut self, init: Initialisation, frame: &Frame<'_>, obs: &Observation) -> FrameOutput {
         if self.known_length.is_none() {
             self.known_length = Some(init.length);
             self.known_radius = init.radius;
@@ -543,21 +660,31 @@ impl Tracker {
                 self.radius(),
             ));
         }
+        // The cloud was of the old state's shapes: the new nodes are
+        // judged against the whole mask's.
+        let whole;
+        let cloud = if obs.unclaimed > 0 {
+            whole = build_cloud(frame, &obs.mask, &self.camera, &self.cloud_settings());
+            &whole
+        } else {
+            &obs.cloud
+        };
         let p = &self.params;
         let visible = visible_nodes_relative(
             &init.nodes,
-            &obs.cloud,
+            cloud,
             p.visibility_radius,
             p.visibility_min_points as usize,
             p.visibility_min_fraction,
         );
         self.refused_jump_cloud = None;
+        self.unclaimed_known = None;
         self.state = Some(TrackState {
             nodes: init.nodes.clone(),
             lost: false,
         });
         self.stepper.start(&init.nodes);
-        Ok(FrameOutput {
+        FrameOutput {
             nodes: init.nodes,
             visible,
             status: FrameStatus::Initialised,
@@ -565,7 +692,7 @@ impl Tracker {
             upe: None,
             trackdlo: None,
             init: Some(init.report),
-        })
+        }
     }
 
     /// Initialises from this frame, or reports it lost (holding the nodes
@@ -604,6 +731,30 @@ impl Tracker {
     pub fn current_length(&self) -> f64 {
         polyline_length(self.nodes())
     }
+}
+
+/// What contradicts a step's nodes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Contradiction {
+    /// Nothing.
+    None,
+    /// The images (stretched, free space, unexplained cloud).
+    Images,
+    /// Shapes out of the rope's reach hold much of the mask.
+    Unclaimed,
+}
+
+/// Mean distance from each of `a` to the nearest of `b`.
+fn mean_distance(a: &[Vec3], b: &[Vec3]) -> f64 {
+    let sum: f64 = a
+        .iter()
+        .map(|p| {
+            b.iter()
+                .map(|q| (p - q).norm())
+                .fold(f64::INFINITY, f64::min)
+        })
+        .sum();
+    sum / a.len().max(1) as f64
 }
 
 /// Why a re-initialisation attempt failed.

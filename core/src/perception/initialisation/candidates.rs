@@ -125,6 +125,7 @@ pub(super) fn rope_pieces(
         };
         let mut grid = Grid::around(&shape.pixels, mask.width);
         grid.thin();
+        grid.prune_spurs();
         let graph = match SkeletonGraph::of(&grid) {
             Ok(g) => g,
             Err(e) => {
@@ -464,6 +465,22 @@ impl Chain {
     }
 }
 
+/// `true` when `target` lies ahead of an end at `from` going `dir`, within
+/// [`MAX_JOIN_ANGLE_DEGREES`] of its direction: the end of a piece cut by an
+/// occluder's edge may sit anywhere across the rope's width, so the cone
+/// starts `slack` pixels wide.
+fn points_at(from: Vec2, dir: Vec2, target: Vec2, slack: f64) -> bool {
+    let n = dir.norm();
+    if !(n > 0.0) {
+        return false;
+    }
+    let g = target - from;
+    let along = g.dot(&dir) / n;
+    let across = (g - dir * (along / n)).norm();
+    let cone = libm::tan(MAX_JOIN_ANGLE_DEGREES.to_radians());
+    along >= -slack && across <= cone * along.max(0.0) + slack
+}
+
 /// A possible join of two piece ends.
 struct Link {
     gap: f64,
@@ -476,7 +493,6 @@ struct Link {
 pub(super) fn join(pieces: &[Piece], metric: bool) -> Vec<Chain> {
     let n = pieces.len();
     let mut links = Vec::new();
-    let limit = MAX_JOIN_ANGLE_DEGREES.to_radians();
     for a in 0..n {
         for b in a + 1..n {
             let (pa, pb) = (&pieces[a], &pieces[b]);
@@ -493,8 +509,8 @@ pub(super) fn join(pieces: &[Piece], metric: bool) -> Vec<Chain> {
                         continue;
                     }
                     let ((xa, oa), (xb, ob)) = (pa.end(ha), pb.end(hb));
-                    let g = xb - xa;
-                    if g.norm() >= 1.0 && (angle(oa, g) > limit || angle(ob, -g) > limit) {
+                    let slack = pa.width_px.max(pb.width_px);
+                    if !(points_at(xa, oa, xb, slack) && points_at(xb, ob, xa, slack)) {
                         continue;
                     }
                     links.push(Link {

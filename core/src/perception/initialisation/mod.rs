@@ -27,7 +27,7 @@ pub use candidates::{
 };
 pub use graph::{MAX_CROSSING_TURN_DEGREES, MAX_JUNCTION_CELLS};
 use lift::{line_through, resolve_crossings};
-pub use skeleton::MAX_SHAPES;
+pub use skeleton::{MAX_SHAPES, SPUR_DISCS};
 
 use super::camera::CameraIntrinsics;
 use super::frame::Frame;

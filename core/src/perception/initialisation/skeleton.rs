@@ -12,6 +12,14 @@ use crate::perception::segmentation::Mask;
 /// selects thousands of specks (a textured table) costs a bounded amount.
 pub const MAX_SHAPES: usize = 64;
 
+/// Longest spur removed, in units of the largest disc at its junction
+/// (a spur runs from the axis to the edge: about one disc).
+pub const SPUR_DISCS: f64 = 1.5;
+/// Most passes of spur removal.
+const MAX_PRUNE_PASSES: usize = 8;
+/// Most passes removing the simple cells Zhang-Suen leaves.
+const MAX_SIMPLIFY_PASSES: usize = 16;
+
 /// One 8-connected component of the mask.
 #[derive(Debug, Clone)]
 pub(super) struct Shape {
@@ -129,6 +137,9 @@ impl Grid {
             let (u, v) = (i % w_img, i / w_img);
             cells[(v - vmin + 1) * w + (u - umin + 1)] = true;
         }
+        // (the holes filled here are not in `pixels`: the shape's own
+        // pixel count stays the mask's)
+        fill_small_holes(&mut cells, w, h);
         let dist = distance_transform(&cells, w, h);
         Self {
             w,
@@ -201,17 +212,86 @@ impl Grid {
                 break;
             }
         }
-        // Zhang-Suen leaves the corner cells of staircases: a cell whose
-        // two or three neighbours touch each other joins nothing they do not
-        // already join. Without them a cell with three or more neighbours
-        // is a junction, as in the graph of a one-cell-wide curve.
-        for &i in &live {
-            let p = self.ring(i).map(|j| self.cells[j]);
-            let b = p.iter().filter(|&&x| x).count();
-            if (2..=3).contains(&b) && ring_components(&p) == 1 {
-                self.cells[i] = false;
+        // Zhang-Suen leaves the corner cells of staircases and, now and
+        // then, a 2 x 2 block. Removing every simple cell that is not an
+        // end (one whose neighbours stay connected, and whose background
+        // stays one region, without it) until none is left makes the
+        // skeleton one cell wide everywhere: then a cell with three or
+        // more neighbours is a junction, as in the graph of a curve.
+        for _ in 0..MAX_SIMPLIFY_PASSES {
+            let mut changed = false;
+            for &i in &live {
+                if !self.cells[i] {
+                    continue;
+                }
+                let p = self.ring(i).map(|j| self.cells[j]);
+                let b = p.iter().filter(|&&x| x).count();
+                if b >= 2 && ring_components(&p) == 1 && background_runs(&p) == 1 {
+                    self.cells[i] = false;
+                    changed = true;
+                }
+            }
+            live.retain(|&i| self.cells[i]);
+            if !changed {
+                break;
             }
         }
+    }
+
+    /// Removes spurs: a run of cells from a skeleton end to a junction no
+    /// longer than [`SPUR_DISCS`] times the largest disc at the junction is
+    /// the thinning's answer to a bump on the shape's edge (or a square
+    /// tip's corner), not a strand. A rope's own end is longer, unless it
+    /// stops within a width of a junction.
+    /// Spurs that branch (a ragged bump) go over several passes, at most
+    /// [`MAX_PRUNE_PASSES`].
+    pub fn prune_spurs(&mut self) {
+        for _ in 0..MAX_PRUNE_PASSES {
+            if !self.prune_spurs_once() {
+                break;
+            }
+        }
+    }
+
+    fn prune_spurs_once(&mut self) -> bool {
+        let ends: Vec<usize> = (0..self.cells.len())
+            .filter(|&i| self.cells[i] && self.inside(i) && self.degree(i) == 1)
+            .collect();
+        let mut remove = Vec::new();
+        for e in ends {
+            let mut path = vec![e];
+            let mut prev = usize::MAX;
+            let mut at = e;
+            loop {
+                let next: Vec<usize> = self
+                    .ring(at)
+                    .into_iter()
+                    .filter(|&j| self.cells[j] && j != prev && !path.contains(&j))
+                    .collect();
+                if next.len() != 1 {
+                    break;
+                }
+                let j = next[0];
+                if self.degree(j) >= 3 {
+                    // `j` is the junction the run comes from.
+                    if path.len() as f64 <= SPUR_DISCS * f64::from(self.dist[j]) {
+                        remove.extend(path.iter().copied());
+                    }
+                    break;
+                }
+                if path.len() as f64 > SPUR_DISCS * f64::from(self.dist[j]) + 2.0 {
+                    break;
+                }
+                prev = at;
+                at = j;
+                path.push(j);
+            }
+        }
+        let changed = !remove.is_empty();
+        for i in remove {
+            self.cells[i] = false;
+        }
+        changed
     }
 
     /// Set skeleton cells among the eight neighbours of cell `i`.
@@ -234,6 +314,91 @@ impl Grid {
     pub fn width_at(&self, i: usize) -> f64 {
         (2.0 * f64::from(self.dist[i]) - 1.0).max(1.0)
     }
+}
+
+/// Fills the holes of a shape (unset regions not reaching the grid's
+/// border) no larger than the square of its mean width (twice its area
+/// over its perimeter): a pixel of glare or a speck of colour noise inside
+/// a rope, which the skeleton would otherwise go round. A loop the rope
+/// lies in encloses far more.
+fn fill_small_holes(cells: &mut [bool], w: usize, h: usize) {
+    let set = |i: usize, c: &[bool]| c[i];
+    let side = |i: usize| -> [Option<usize>; 4] {
+        let (x, y) = (i % w, i / w);
+        [
+            (y > 0).then(|| i - w),
+            (x + 1 < w).then(|| i + 1),
+            (y + 1 < h).then(|| i + w),
+            (x > 0).then(|| i - 1),
+        ]
+    };
+    let area = cells.iter().filter(|&&c| c).count();
+    let perimeter = (0..cells.len())
+        .filter(|&i| set(i, cells) && side(i).iter().any(|n| n.is_some_and(|j| !cells[j])))
+        .count();
+    if perimeter == 0 {
+        return;
+    }
+    let width = 2.0 * area as f64 / perimeter as f64;
+    let limit = (width * width) as usize;
+    // 0 unvisited, 1 outside, 2 a hole already looked at.
+    let mut seen = vec![0u8; cells.len()];
+    let mut stack = vec![0usize];
+    seen[0] = 1;
+    while let Some(i) = stack.pop() {
+        for j in side(i).into_iter().flatten() {
+            if !cells[j] && seen[j] == 0 {
+                seen[j] = 1;
+                stack.push(j);
+            }
+        }
+    }
+    let mut hole = Vec::new();
+    for start in 0..cells.len() {
+        if cells[start] || seen[start] != 0 {
+            continue;
+        }
+        hole.clear();
+        seen[start] = 2;
+        stack.push(start);
+        while let Some(i) = stack.pop() {
+            hole.push(i);
+            for j in side(i).into_iter().flatten() {
+                if !cells[j] && seen[j] == 0 {
+                    seen[j] = 2;
+                    stack.push(j);
+                }
+            }
+        }
+        if hole.len() <= limit {
+            for &i in &hole {
+                cells[i] = true;
+            }
+        }
+    }
+}
+
+/// Number of runs of unset cells round a ring that include a side cell
+/// (N, E, S or W): the background regions touching the cell.
+fn background_runs(p: &[bool; 8]) -> usize {
+    let Some(start) = (0..8).find(|&k| p[k]) else {
+        return 1;
+    };
+    let mut runs = 0;
+    let mut in_run = false;
+    let mut has_side = false;
+    for n in 1..=8 {
+        let k = (start + n) % 8;
+        if !p[k] {
+            in_run = true;
+            has_side |= k % 2 == 0;
+        } else if in_run {
+            runs += usize::from(has_side);
+            in_run = false;
+            has_side = false;
+        }
+    }
+    runs
 }
 
 /// Number of 0 -> 1 changes going once round a ring of eight neighbours
