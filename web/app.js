@@ -17,12 +17,14 @@ import { pageStats } from './plot.js';
 import { explainFrame, moveStep, stepName } from './explain.js';
 import { bindScenePanel } from './scenes.js';
 import { startWebcam, stopWebcam } from './webcam.js';
+import { bindRopePanel, setRopeInputs } from './rope.js';
 
 hooks.opened = async () => {
   const info = state.seq.info;
   updatePlayButton();
   renderRects();
   setHsvInputs(info.hsv);
+  setRopeInputs(info.rope);
   $('timeline').max = String(info.color_files.length - 1);
   $('canvas').width = info.camera.width;
   $('canvas').height = info.camera.height;
@@ -121,6 +123,7 @@ $('timeline').oninput = (e) => { state.playing = false; moveTo(Number(e.target.v
 document.addEventListener('keydown', (e) => { if (e.code === 'Space' && e.target === document.body) { e.preventDefault(); play(); } });
 for (const id of ['show-truth', 'show-mask', 'show-depth']) $(id).onchange = () => goTo(state.index);
 bindPanels();
+bindRopePanel(guarded);
 
 $('export').onclick = guarded(async () => {
   if (!state.seq) return;

@@ -7,6 +7,7 @@ import { Request } from './protocol.js';
 import { canvas, draw, drawDragged } from './draw.js';
 import { goTo, retrackFromHere, updatePlayButton } from './playback.js';
 import { checkDlo, hsvRangeAround, parseParams, defaultParams } from './core.js';
+import { chooseRopeAt } from './rope.js';
 import { setParamInputs, paramsFromInputs, showGroupsFor } from './params-panel.js';
 import { shareLink } from './share.js';
 
@@ -61,13 +62,15 @@ export function setMode(mode, on = false) {
   canvas.classList.toggle('picking', state.mode === 'pick');
 }
 
-// The colour range around the pixel at (x, y) of the shown frame.
+// The colour range around the pixel at (x, y) of the shown frame, and the
+// rope through it: where several shapes look like a rope, the one clicked.
 export function pickAt(x, y) {
   const f = state.frame;
   const k = 4 * (y * f.width + x);
   const hsv = hsvRangeAround(f.rgba[k], f.rgba[k + 1], f.rgba[k + 2]);
   setHsvInputs(hsv);
-  return applyHsv(hsv);
+  if (state.webcam || !state.seq) return applyHsv(hsv);
+  return chooseRopeAt(x, y, hsv);
 }
 
 export function bindPanels() {
@@ -105,7 +108,7 @@ export function bindPanels() {
     const seq = state.seq;
     state.busy = state.busy.then(async () => {
       await settleLookahead();
-      await call(Request.open(seq.info.camera, state.params, state.hsv, state.compare));
+      await call(Request.open(seq.info.camera, state.params, state.hsv, state.rope, state.compare));
       state.results = [];
       state.tracked = -1;
     });

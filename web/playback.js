@@ -9,6 +9,7 @@ import { draw } from './draw.js';
 import { updateLabels, drawPlot, updateStatsPanel, pageStats, STATS_WINDOW } from './plot.js';
 import { projectPoints } from './core.js';
 import { showStep } from './explain.js';
+import { noteRopeFinding } from './rope.js';
 
 // Frames requested ahead of the shown one while playing.
 export const LOOKAHEAD = 2;
@@ -42,7 +43,7 @@ export function goTo(i) {
 // What the page keeps of a frame's reply.
 export function keep(r) {
   return {
-    nodes: r.nodes, nodesPx: r.nodesPx, visible: r.visible, status: r.status, reason: r.reason,
+    nodes: r.nodes, nodesPx: r.nodesPx, visible: r.visible, status: r.status, reason: r.reason, init: r.init || null,
     segmentMs: r.segmentMs, cloudMs: r.cloudMs, trackMs: r.trackMs, totalMs: r.totalMs, decodeMs: r.decodeMs,
     error: r.error, snapshot: r.snapshot,
     second: r.second || null,
@@ -67,6 +68,7 @@ async function goToNow(i) {
       if (generation !== state.generation) return;
       state.results[k] = keep(r);
       state.tracked = k;
+      noteRopeFinding(k, r);
       if (state.playing && k === i) {
         // Keep LOOKAHEAD frames requested: the worker decodes the later
         // ones while it tracks the earlier, and while this one is drawn.
@@ -110,19 +112,20 @@ export async function play() {
 }
 
 // When settings change, the shown frame and those after it are tracked
-// again: the worker's tracker goes back to its state before the shown frame.
-export function invalidateAfterCurrent() {
+// again: the worker's tracker goes back to its state before the shown frame
+// or, `fresh`, to no state (the rope is found again on the shown frame).
+export function invalidateAfterCurrent(fresh = false) {
   state.epoch++;
   const kept = Math.min(state.tracked, state.index - 1);
-  if (kept === state.tracked && !state.lookahead.length) return;
+  if (!fresh && kept === state.tracked && !state.lookahead.length) return;
   state.results.length = kept + 1;
   state.tracked = kept;
-  const snapshot = kept >= 0 ? state.results[kept].snapshot : null;
+  const snapshot = !fresh && kept >= 0 ? state.results[kept].snapshot : null;
   state.busy = state.busy.then(settleLookahead).then(() => call(Request.restore(snapshot)));
 }
 
 // Re-tracks from the shown frame after a settings change, and shows it.
-export function retrackFromHere() {
-  invalidateAfterCurrent();
+export function retrackFromHere(fresh = false) {
+  invalidateAfterCurrent(fresh);
   return goTo(state.index);
 }

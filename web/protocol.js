@@ -5,16 +5,18 @@
 // request    fields                                          reply
 // defaults   -                                               { params }
 // info       name, json {file: bytes}, images [paths]        { info }
-// open       camera, params, hsv, compare                    {}
+// open       camera, params, hsv, rope, compare              {}
 // params     params                                          { params } (validated, every field)
 // hsv        hsv {lower, upper}                              {}
+// rope       hint ([u, v] clicked, or null), prior           {}
+//            (dlo.json's rope, or null)
 // restore    snapshot ({main, second} or null)               {}
 // zip        bytes (transferred), name                       { names }
 // zipRead    path                                            { bytes }
 // recording  file (a File, not copied), name, dlo (text|null)  { info, details }; while the index is
 //                                                              read: { id, progress: [offset, length] }
 // frame      index, track, color, depth, colorName,          { index, width, height, decodeMs, rgba,
-//            depthName, fromZip, fromRecording, depthScale,    [nodes, nodesPx, visible, status, reason, segmentMs, cloudMs,
+//            depthName, fromZip, fromRecording, depthScale,    [nodes, nodesPx, visible, status, reason, init, segmentMs, cloudMs,
 //            occlusions, groundtruth, wantMask, wantDepth,      trackMs, totalMs, error, second, snapshot,
 //            decoder ('browser' | 'wasm'), or bitmap (a webcam's ImageBitmap, transferred) instead of files
 //                                                               mask], [depth (RGBA ramp)] }
@@ -24,9 +26,10 @@
 export const Request = {
   defaults: () => ({ type: 'defaults' }),
   info: (name, json, images) => ({ type: 'info', name, json, images }),
-  open: (camera, params, hsv, compare) => ({ type: 'open', camera, params, hsv, compare }),
+  open: (camera, params, hsv, rope, compare) => ({ type: 'open', camera, params, hsv, rope, compare }),
   params: (params) => ({ type: 'params', params }),
   hsv: (hsv) => ({ type: 'hsv', hsv }),
+  rope: (hint, prior) => ({ type: 'rope', hint, prior }),
   restore: (snapshot) => ({ type: 'restore', snapshot }),
   zip: (bytes, name) => ({ type: 'zip', bytes, name }),
   zipRead: (path) => ({ type: 'zipRead', path }),

@@ -45,9 +45,10 @@ async function finishOpening(generation, seq) {
   const { info } = seq;
   hooks.closing();
   await settleLookahead();
-  await call(Request.open(info.camera, state.params, info.hsv, state.compare));
+  await call(Request.open(info.camera, state.params, info.hsv, info.rope || null, state.compare));
   if (generation !== state.generation) return;
   state.seq = seq;
+  state.rope = info.rope || null;
   state.sampleName = null;
   $('sample').selectedIndex = -1; // the sample list shows none while another sequence is open
   state.hsv = info.hsv;

@@ -10,10 +10,11 @@ export const state = {
   sampleName: null,   // the bundled sample last opened, for a shared link
   index: 0,           // frame shown
   tracked: -1,        // last frame tracked (frames are tracked in order)
-  results: [],        // per frame: { nodes, nodesPx, visible, status, reason, segmentMs, cloudMs, trackMs, totalMs, decodeMs, error, snapshot, second }
+  results: [],        // per frame: { nodes, nodesPx, visible, status, reason, init, segmentMs, cloudMs, trackMs, totalMs, decodeMs, error, snapshot, second }
   params: null,       // parameters in force (all fields, with the algorithm)
   compare: '',        // algorithm tracked alongside for comparison ('' for none)
   hsv: null,          // { lower, upper } in force
+  rope: null,         // dlo.json's rope in force ({ length_m, diameter_m }), or null
   userRects: [],      // [x, y, w, h] drawn on the image
   playing: false,
   busy: Promise.resolve(),

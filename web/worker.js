@@ -17,7 +17,7 @@ let second = null;          // the tracker of the compared algorithm, if any
 let secondAlgorithm = null;
 let archive = null;
 let recording = null;
-let opened = null;          // { camera, hsv } of the trackers, for the explain mode's own tracker
+let opened = null;          // { camera, hsv, rope, hint } of the trackers, for the explain mode's own tracker
 
 // Parameters checked by the core, as the command checks a --params file.
 const checked = (params) => parseParams(JSON.stringify(params));
@@ -27,7 +27,7 @@ function track(t, f, m) {
   const r = t.trackDecoded(f, m.depthScale, new Float64Array(m.occlusions));
   const out = {
     nodes: Array.from(r.nodes), nodesPx: Array.from(r.nodesPx), visible: Array.from(r.visible),
-    status: r.status, reason: r.reason ?? null, segmentMs: r.segment_ms, cloudMs: r.cloud_ms, trackMs: r.track_ms, totalMs: r.total_ms,
+    status: r.status, reason: r.reason ?? null, init: r.init, segmentMs: r.segment_ms, cloudMs: r.cloud_ms, trackMs: r.track_ms, totalMs: r.total_ms,
     cloudPoints: r.cloud_points,
   };
   r.free();
@@ -175,12 +175,21 @@ const handlers = {
     if (tracker) tracker.free();
     if (second) second.free();
     const params = checked(m.params);
-    tracker = new WasmTracker({ camera: m.camera, params, hsv: m.hsv });
-    opened = { camera: m.camera, hsv: m.hsv };
+    tracker = new WasmTracker({ camera: m.camera, params, hsv: m.hsv, rope: m.rope || null });
+    opened = { camera: m.camera, hsv: m.hsv, rope: m.rope || null, hint: null };
     secondAlgorithm = m.compare || null;
     second = secondAlgorithm
-      ? new WasmTracker({ camera: m.camera, params: { ...params, algorithm: secondAlgorithm }, hsv: m.hsv })
+      ? new WasmTracker({ camera: m.camera, params: { ...params, algorithm: secondAlgorithm }, hsv: m.hsv, rope: m.rope || null })
       : null;
+    return {};
+  },
+  rope: (m) => {
+    for (const t of [tracker, second]) {
+      if (!t) continue;
+      t.setRopePrior(m.prior);
+      if (m.hint) t.setRopeHint(m.hint[0], m.hint[1]);
+    }
+    if (opened) Object.assign(opened, { rope: m.prior, hint: m.hint || opened.hint });
     return {};
   },
   params: (m) => {
@@ -199,7 +208,8 @@ const handlers = {
   explain: async (m, early) => {
     if (!opened) throw new Error('no sequence is open');
     const [f] = await decode(m, early);
-    const t = new WasmTracker({ camera: opened.camera, params: tracker.params(), hsv: opened.hsv });
+    const t = new WasmTracker({ camera: opened.camera, params: tracker.params(), hsv: opened.hsv, rope: opened.rope });
+    if (opened.hint) t.setRopeHint(opened.hint[0], opened.hint[1]);
     try {
       t.restore(m.snapshot);
       const view = t.explain(f, m.depthScale, new Float64Array(m.occlusions));

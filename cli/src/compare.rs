@@ -33,16 +33,17 @@ impl Case {
     fn new(kind: ScenarioKind, frames: usize, seed: u64) -> Self {
         Self {
             kind,
-            variant: Variant::BASE,
+            variant: kind.default_variant(),
             frames,
             seed,
             tuning: false,
         }
     }
 
-    /// `static-s`, or `static-s@hd-tilted-red` in another variant.
+    /// `static-s`, or `static-s@hd-tilted-red` in another variant than
+    /// the scenario's own.
     fn name(&self) -> String {
-        if self.variant.is_base() {
+        if self.variant == self.kind.default_variant() {
             self.kind.name()
         } else {
             format!("{}@{}", self.kind.name(), self.variant.name)
@@ -90,6 +91,18 @@ fn cases(frames_override: Option<usize>) -> Vec<Case> {
         other(ScenarioKind::OcclusionSweep { percent: 50 }, "hd-thin-blue"),
         other(ScenarioKind::FastPull, "hd-thin-blue"),
     ]);
+    // Finding the rope: among clutter, through its own crossing, in pieces.
+    for kind in [
+        ScenarioKind::CableDesk,
+        ScenarioKind::CrossingLoop,
+        ScenarioKind::InPieces,
+    ] {
+        out.push(Case::new(kind, 90, 1));
+    }
+    out.extend([
+        other(ScenarioKind::CrossingLoop, "hd-thin-blue"),
+        other(ScenarioKind::InPieces, "near-thin-green"),
+    ]);
     for c in out.iter_mut() {
         c.tuning = c.variant.is_base() && TUNING.contains(&c.kind.name().as_str());
     }
@@ -104,7 +117,7 @@ const SWEEP_PERCENTS: [u8; 7] = [10, 20, 30, 40, 50, 60, 70];
 
 /// The folder of a case inside the data folder.
 fn case_dir(data: &Path, case: &Case) -> PathBuf {
-    let variant = if case.variant.is_base() {
+    let variant = if case.variant == case.kind.default_variant() {
         String::new()
     } else {
         format!("-{}", case.variant.name)

@@ -25,7 +25,7 @@ USAGE:
   upetrack eval <sequence>... [--algorithm A,B,..] [--params <params.json>] [--json <out.json>] [--markdown <out.md>] [--per-frame <out.csv>]
   upetrack score <sequence> <result.json>... [--json <out.json>] [--markdown <out.md>]
   upetrack compare [--data <dir>] [--frames N] [--json <out.json>] [--markdown <out.md>] [--update <page.md>] [--figures <dir>]
-  upetrack synth <scenario> <dir> [--frames N] [--seed S] [--hd] [--variant V]
+  upetrack synth <scenario> <dir> [--frames N] [--seed S] [--hd] [--variant V] [--rope-prior]
                  [--depth-noise X] [--jpeg-quality Q] [--y4m <video.y4m>]
   upetrack bench [<sequence>...] [--frames N] [--repeat R] [--algorithm A,B,..]
   upetrack overlay <sequence> <result.json> <frame> <out.png> [--depth]
@@ -38,8 +38,10 @@ camera recording (ROS1 .bag or rosbag2 .db3 from the RealSense Viewer, rs-record
 a recording takes its configuration from --dlo <dlo.json> (colour range, occluders),
 and --color-topic / --depth-topic when the streams are not found by name;
 --align x86-sse|portable picks librealsense's aligner (default: the recording's era).
-Algorithms: upetrack (default), cpd, trackdlo; --algorithm overrides the parameter file's.
-Scenarios: static-s, dynamic-pull, tip-drag, sweep-10..sweep-50, lifted-swing, fast-pull.";
+Algorithms: upetrack (default), cpd, trackdlo, cdcpd2; --algorithm overrides the parameter file's.
+Scenarios (`upetrack scenarios` describes them): static-s, dynamic-pull, tip-drag, sweep-10..sweep-70,
+lifted-swing, fast-pull, gripper-swing, box-over-end, box-over-middle, cable-desk, crossing-loop, in-pieces;
+synth --rope-prior writes the rope's length and diameter into dlo.json.";
 
 /// A command-line error with its message.
 struct CliError(String);
@@ -236,6 +238,42 @@ fn cmd_track(raw: &[String]) -> Result<(), CliError> {
         lost,
         out
     );
+    report_initialisations(&result)
+}
+
+/// Most initialisations `track` describes one by one.
+const MAX_REPORTED_INITIALISATIONS: usize = 3;
+
+/// Says where the rope was found and why (the first few times), and fails
+/// when it was found in no frame: a scene where nothing is rope-shaped is
+/// refused rather than tracked.
+fn report_initialisations(result: &upetrack_io::result::TrackResult) -> Result<(), CliError> {
+    let found: Vec<_> = result
+        .frames
+        .iter()
+        .filter_map(|f| f.init.as_ref().map(|r| (f.frame, r)))
+        .collect();
+    for (frame, report) in found.iter().take(MAX_REPORTED_INITIALISATIONS) {
+        eprintln!("frame {frame}: rope found: {report}");
+    }
+    if found.len() > MAX_REPORTED_INITIALISATIONS {
+        eprintln!(
+            "... and found again on {} more frames (`init` in the result JSON says how)",
+            found.len() - MAX_REPORTED_INITIALISATIONS
+        );
+    }
+    if found.is_empty() {
+        let why = result
+            .frames
+            .iter()
+            .find_map(|f| f.reason.clone())
+            .unwrap_or_else(|| "the sequence has no frames".into());
+        return Err(CliError(format!(
+            "no rope found in any frame (the result JSON lists every frame as lost): {why}\n\
+             Check the colour range (dlo.json's segmentation), or describe the rope \
+             (dlo.json's \"rope\": {{\"length_m\": .., \"diameter_m\": ..}})"
+        )));
+    }
     Ok(())
 }
 

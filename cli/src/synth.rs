@@ -66,7 +66,7 @@ pub const MAX_DEPTH_NOISE: f64 = 10.0;
 pub fn cmd_synth(raw: &[String]) -> Result<(), CliError> {
     let args = Args::parse(
         raw,
-        &["hd"],
+        &["hd", "rope-prior"],
         &[
             "frames",
             "seed",
@@ -119,7 +119,9 @@ pub fn cmd_synth(raw: &[String]) -> Result<(), CliError> {
     }
     let start = Instant::now();
     let scenario = Scenario::with_rope(kind, frames, seed, render, variant.rope());
-    let writer = SyntheticWriter::new(scenario).with_jpeg_quality(quality);
+    let writer = SyntheticWriter::new(scenario)
+        .with_jpeg_quality(quality)
+        .with_rope_prior(args.flag("rope-prior"));
     let video = args.value("y4m");
     let n = write_scenario_and_video(writer, Path::new(dir), video.map(Path::new))?;
     if let Some(video) = video {

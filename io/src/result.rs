@@ -2,6 +2,7 @@
 //! and one entry per frame.
 
 use serde::{Deserialize, Serialize};
+use upetrack::perception::initialisation::InitReport;
 use upetrack::Params;
 
 /// One frame of a result.
@@ -27,6 +28,11 @@ pub struct FrameRecord {
     /// was found again from what is visible.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub recovered: bool,
+    /// On a frame where the rope was found (initialised or recovered):
+    /// the rope-shaped candidates, the one taken and why, and what was
+    /// set aside.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub init: Option<InitReport>,
 }
 
 /// A whole result file.

@@ -74,6 +74,7 @@ pub fn track_frame(
         lost: reason.is_some(),
         reason,
         recovered: t.output.status == FrameStatus::Recovered,
+        init: t.output.init,
     })
 }
 
@@ -84,7 +85,8 @@ pub fn track_sequence<S: Source>(
     params: Params,
     now_ms: &mut dyn FnMut() -> f64,
 ) -> Result<TrackResult, SequenceError> {
-    let mut tracker = Tracker::new(params, seq.camera, seq.hsv)
+    let mut tracker = seq
+        .tracker(params)
         .map_err(|e| SequenceError::invalid("parameters", e.to_string()))?;
     let mut frames = Vec::with_capacity(seq.len());
     for i in 0..seq.len() {

@@ -5,7 +5,9 @@ use std::cell::RefCell;
 
 use serde::{Deserialize, Serialize};
 use upetrack::math::Vec3;
-use upetrack::{CameraIntrinsics, Frame, HsvRange, Rect};
+use upetrack::perception::initialisation::RopePrior;
+use upetrack::tracker::TrackerError;
+use upetrack::{CameraIntrinsics, Frame, HsvRange, Params, Rect, Tracker};
 
 use crate::decode::{decode_color, decode_depth, RgbImage};
 use crate::error::SequenceError;
@@ -92,6 +94,27 @@ impl OcclusionConfig {
     }
 }
 
+/// What the user knows of the rope, in `dlo.json`'s `rope` (both optional).
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Default)]
+pub struct RopeConfig {
+    /// Length, metres.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub length_m: Option<f64>,
+    /// Diameter, metres.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub diameter_m: Option<f64>,
+}
+
+impl RopeConfig {
+    /// The core's prior.
+    pub fn prior(&self) -> RopePrior {
+        RopePrior {
+            length: self.length_m,
+            diameter: self.diameter_m,
+        }
+    }
+}
+
 /// `dlo.json`: what this project adds to a recording. Unknown keys are ignored.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq, Default)]
 pub struct DloConfig {
@@ -110,6 +133,9 @@ pub struct DloConfig {
     /// Ground-truth file name.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub groundtruth: Option<String>,
+    /// What the user knows of the rope.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rope: Option<RopeConfig>,
 }
 
 impl DloConfig {
@@ -156,6 +182,11 @@ impl DloConfig {
                     format!("occlusions[{i}]: negative width or height in {:?}", o.rect),
                 ));
             }
+        }
+        if let Some(rope) = &self.rope {
+            rope.prior()
+                .validate()
+                .map_err(|e| SequenceError::invalid(path, format!("rope: {e}")))?;
         }
         if let Some(gt) = &self.groundtruth {
             if !is_inside_name(gt) {
@@ -544,6 +575,18 @@ impl<S: Source> Sequence<S> {
         let rect = self.config.occlusions.iter().map(|o| o.frames[0] as usize);
         let truth = self.groundtruth_occluded.iter().position(|&o| o);
         rect.chain(truth).min()
+    }
+
+    /// What `dlo.json` says of the rope (nothing when absent).
+    pub fn rope_prior(&self) -> RopePrior {
+        self.config.rope.map(|r| r.prior()).unwrap_or_default()
+    }
+
+    /// A tracker for this sequence: its camera, colour range and rope prior.
+    pub fn tracker(&self, params: Params) -> Result<Tracker, TrackerError> {
+        let mut t = Tracker::new(params, self.camera, self.hsv)?;
+        t.set_rope_prior(self.rope_prior())?;
+        Ok(t)
     }
 
     /// Reads and decodes frame `index`, checking both images against the intrinsics.

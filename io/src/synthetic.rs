@@ -6,7 +6,7 @@ use upetrack_synth::{Scenario, SynthFrame};
 
 use crate::error::SequenceError;
 use crate::sequence::{
-    DloConfig, GroundTruthFile, GroundTruthFrame, IntrinsicsFile, OcclusionConfig,
+    DloConfig, GroundTruthFile, GroundTruthFrame, IntrinsicsFile, OcclusionConfig, RopeConfig,
     SegmentationConfig,
 };
 use crate::write::{compact_json_bytes, encode_depth_png, encode_jpeg, json_bytes, JPEG_QUALITY};
@@ -31,6 +31,7 @@ pub struct SyntheticWriter {
     scenario: Scenario,
     groundtruth: GroundTruthFile,
     jpeg_quality: u8,
+    rope_prior: bool,
 }
 
 impl SyntheticWriter {
@@ -40,7 +41,15 @@ impl SyntheticWriter {
             scenario,
             groundtruth: GroundTruthFile::default(),
             jpeg_quality: JPEG_QUALITY,
+            rope_prior: false,
         }
+    }
+
+    /// The same writer also writing the rope's length and diameter into
+    /// `dlo.json` (`rope`), as a user who knows them would.
+    pub fn with_rope_prior(mut self, on: bool) -> Self {
+        self.rope_prior = on;
+        self
     }
 
     /// The same writer encoding colour at JPEG `quality` (1..=100, clamped)
@@ -76,6 +85,10 @@ impl SyntheticWriter {
                 })
                 .collect(),
             groundtruth: Some("groundtruth.json".into()),
+            rope: self.rope_prior.then(|| RopeConfig {
+                length_m: Some(s.rope.settings.length),
+                diameter_m: Some(s.rope.settings.thickness),
+            }),
         };
         Ok(vec![
             json(

@@ -5,11 +5,12 @@
 
 use serde::{Deserialize, Serialize};
 use upetrack::metrics::{frame_error, frame_error_px};
+use upetrack::perception::initialisation::InitReport;
 use upetrack::tracker::{FrameOutput, FrameStatus, Observation};
 use upetrack::{CameraIntrinsics, Frame, HsvRange, Params, Rect, Tracker, Vec3};
 use upetrack_io::decode::{decode_color, decode_depth};
 use upetrack_io::run::run_frame;
-use upetrack_io::sequence::{DloConfig, OcclusionConfig, Sequence};
+use upetrack_io::sequence::{DloConfig, OcclusionConfig, RopeConfig, Sequence};
 use upetrack_io::source::{MemorySource, Source};
 use wasm_bindgen::prelude::*;
 
@@ -102,6 +103,9 @@ struct TrackerOptions {
     params: Option<Params>,
     #[serde(default)]
     hsv: Option<HsvRange>,
+    /// `dlo.json`'s `rope`.
+    #[serde(default)]
+    rope: Option<RopeConfig>,
 }
 
 /// A value as plain JS objects (maps too: `Params` flattens UPETrack's
@@ -152,6 +156,7 @@ pub struct FrameResult {
     pub total_ms: f64,
     /// Points in the cloud.
     pub cloud_points: u32,
+    init: Option<InitReport>,
 }
 
 #[wasm_bindgen]
@@ -181,6 +186,23 @@ impl FrameResult {
     pub fn reason(&self) -> Option<String> {
         self.reason.clone()
     }
+    /// On a frame where the rope was found: `{candidates, chosen, rule,
+    /// set_aside, set_aside_count, hint_missed, prior_length_ratio}` (the
+    /// result JSON's `init`), else `null`.
+    #[wasm_bindgen(getter)]
+    pub fn init(&self) -> Result<JsValue, JsError> {
+        match &self.init {
+            Some(r) => r
+                .serialize(&serde_wasm_bindgen::Serializer::json_compatible())
+                .map_err(js_err),
+            None => Ok(JsValue::NULL),
+        }
+    }
+    /// The rope-finding report in words, on a frame where the rope was found.
+    #[wasm_bindgen(getter, js_name = initText)]
+    pub fn init_text(&self) -> Option<String> {
+        self.init.as_ref().map(|r| r.to_string())
+    }
 }
 
 #[wasm_bindgen]
@@ -189,12 +211,15 @@ impl WasmTracker {
     #[wasm_bindgen(constructor)]
     pub fn new(options: JsValue) -> Result<WasmTracker, JsError> {
         let o: TrackerOptions = serde_wasm_bindgen::from_value(options).map_err(js_err)?;
-        let tracker = Tracker::new(
+        let mut tracker = Tracker::new(
             o.params.unwrap_or_default(),
             o.camera,
             o.hsv.unwrap_or_default(),
         )
         .map_err(js_err)?;
+        if let Some(rope) = o.rope {
+            tracker.set_rope_prior(rope.prior()).map_err(js_err)?;
+        }
         Ok(Self {
             tracker,
             last_obs: None,
@@ -220,6 +245,25 @@ impl WasmTracker {
     pub fn set_hsv(&mut self, range: JsValue) -> Result<(), JsError> {
         let range: HsvRange = serde_wasm_bindgen::from_value(range).map_err(js_err)?;
         self.tracker.set_hsv(range).map_err(js_err)
+    }
+
+    /// What the user knows of the rope, as `dlo.json`'s `rope`
+    /// (`{length_m?, diameter_m?}`, or `null` for nothing); checked as the
+    /// command checks it. Takes effect at the next initialisation.
+    #[wasm_bindgen(js_name = setRopePrior)]
+    pub fn set_rope_prior(&mut self, rope: JsValue) -> Result<(), JsError> {
+        let rope: Option<RopeConfig> = serde_wasm_bindgen::from_value(rope).map_err(js_err)?;
+        self.tracker
+            .set_rope_prior(rope.unwrap_or_default().prior())
+            .map_err(js_err)
+    }
+
+    /// A pixel on the rope the user clicked: initialisations take the
+    /// rope-shaped candidate through it (NaN forgets it). `reset` or
+    /// `restore(null)` to initialise again at the next frame.
+    #[wasm_bindgen(js_name = setRopeHint)]
+    pub fn set_rope_hint(&mut self, u: f64, v: f64) {
+        self.tracker.set_rope_hint(Some([u, v]));
     }
 
     /// The state after the last frame, to return to it with `restore`.
@@ -278,6 +322,7 @@ impl WasmTracker {
             track_ms: timed.track_ms,
             total_ms: timed.total_ms,
             cloud_points: obs.cloud.len() as u32,
+            init: out.init.clone(),
         };
         self.last_obs = Some(obs);
         self.last = Some(out);
@@ -460,6 +505,8 @@ struct SequenceInfo {
     fps: f64,
     hsv: HsvRange,
     occlusions: Vec<OcclusionConfig>,
+    /// `dlo.json`'s `rope`, or null.
+    rope: Option<RopeConfig>,
     color_files: Vec<String>,
     depth_files: Vec<String>,
     /// Flat metres per frame, or null.
@@ -470,7 +517,7 @@ struct SequenceInfo {
 /// `intrinsic.json`, `dlo.json`, `groundtruth.json`...) to their bytes;
 /// `images` lists every image path (`color/000000.jpg`, `depth/...`), whose
 /// bytes are not needed yet. Returns `{camera, depth_scale, fps, hsv,
-/// occlusions, color_files, depth_files, groundtruth}`.
+/// occlusions, rope, color_files, depth_files, groundtruth}`.
 #[wasm_bindgen(js_name = readSequenceInfo)]
 pub fn read_sequence_info(
     name: &str,
@@ -498,6 +545,7 @@ fn sequence_info<S: Source>(seq: &Sequence<S>) -> Result<JsValue, JsError> {
         fps: seq.fps,
         hsv: seq.hsv,
         occlusions: seq.config.occlusions.clone(),
+        rope: seq.config.rope,
         color_files: seq.color_files.clone(),
         depth_files: seq.depth_files.clone(),
         groundtruth: seq
@@ -549,7 +597,7 @@ pub fn common_root(paths: Vec<String>) -> Option<String> {
 }
 
 /// Checks `dlo.json` text as the command does (same messages) and returns
-/// `{hsv: {lower, upper}, occlusions}`.
+/// `{hsv: {lower, upper}, occlusions, rope}`.
 #[wasm_bindgen(js_name = checkDlo)]
 pub fn check_dlo(text: &str) -> Result<JsValue, JsError> {
     let config = DloConfig::parse(text.as_bytes(), "dlo.json").map_err(js_err)?;
@@ -558,10 +606,12 @@ pub fn check_dlo(text: &str) -> Result<JsValue, JsError> {
     struct Checked {
         hsv: HsvRange,
         occlusions: Vec<OcclusionConfig>,
+        rope: Option<RopeConfig>,
     }
     to_js(&Checked {
         hsv,
         occlusions: config.occlusions,
+        rope: config.rope,
     })
 }
 

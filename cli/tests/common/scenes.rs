@@ -54,7 +54,7 @@ pub fn hidden_length_errors(
 
 /// Tracks a scenario in memory, handing each frame, its output and whether
 /// it counts as occluded to `on`; a lost frame fails the test.
-fn each_frame(
+pub fn each_frame(
     kind: ScenarioKind,
     variant: Variant,
     frames: usize,

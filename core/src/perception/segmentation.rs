@@ -431,98 +431,58 @@ pub fn segment(frame: &Frame<'_>, range: &HsvRange, occlusions: &[Rect]) -> Mask
     mask
 }
 
-/// A disc of the image: a place, how far from it a shape may lie, and how
-/// wide the shape may be.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Reach {
-    /// Centre, image pixels.
-    pub centre: [f64; 2],
-    /// Radius, pixels.
-    pub radius: f64,
-    /// Widest mean width of a shape found from here, pixels (twice its
-    /// area over its perimeter: a strip's width).
-    pub max_width: f64,
-}
-
-/// The shapes of `mask` (8-connected) with a pixel within one of `reaches`
-/// and a mean width within its `max_width`, and how many of `mask`'s
-/// pixels lie in the other shapes.
-pub fn shapes_within(mask: &Mask, reaches: &[Reach]) -> (Mask, usize) {
-    const UNSEEN: u8 = 0;
-    const KEPT: u8 = 1;
-    const WIDE: u8 = 2;
+/// The shapes of `mask` (8-connected) no wider on average than `max_width`
+/// pixels (twice a shape's area over its perimeter: a strip's width), and
+/// how many of `mask`'s pixels lie in the wider ones.
+pub fn shapes_no_wider(mask: &Mask, max_width: f64) -> (Mask, usize) {
     let (w, h) = (mask.width as i64, mask.height as i64);
-    let mut state = vec![UNSEEN; mask.data.len()];
+    let mut kept = mask.clone();
+    let mut seen = vec![false; mask.data.len()];
     let mut shape = Vec::new();
-    for r in reaches {
-        if !(r.radius >= 0.0) || !r.centre.iter().all(|c| c.is_finite()) {
+    let mut wide = 0;
+    for start in 0..mask.data.len() {
+        if !mask.data[start] || seen[start] {
             continue;
         }
-        let rad = r.radius.min((w + h) as f64);
-        let (u0, u1) = (
-            libm::floor(r.centre[0] - rad).max(0.0) as i64,
-            libm::ceil(r.centre[0] + rad).min((w - 1) as f64) as i64,
-        );
-        let (v0, v1) = (
-            libm::floor(r.centre[1] - rad).max(0.0) as i64,
-            libm::ceil(r.centre[1] + rad).min((h - 1) as f64) as i64,
-        );
-        for v in v0..=v1 {
-            for u in u0..=u1 {
-                let i = (v * w + u) as usize;
-                if !mask.data[i] || state[i] != UNSEEN {
-                    continue;
-                }
-                let (du, dv) = (u as f64 - r.centre[0], v as f64 - r.centre[1]);
-                if du * du + dv * dv > rad * rad {
-                    continue;
-                }
-                // The whole shape, and its boundary (pixels with a side
-                // off the mask).
-                shape.clear();
-                state[i] = KEPT;
-                shape.push(i);
-                let mut k = 0;
-                let mut boundary = 0usize;
-                while k < shape.len() {
-                    let j = shape[k];
-                    k += 1;
-                    let (ju, jv) = ((j as i64) % w, (j as i64) / w);
-                    let mut edge = false;
-                    for dv in -1..=1 {
-                        for du in -1..=1 {
-                            let (nu, nv) = (ju + du, jv + dv);
-                            let inside = nu >= 0 && nv >= 0 && nu < w && nv < h;
-                            let set = inside && mask.data[(nv * w + nu) as usize];
-                            if !set && (du == 0 || dv == 0) {
-                                edge = true;
-                            }
-                            if set {
-                                let n = (nv * w + nu) as usize;
-                                if state[n] == UNSEEN {
-                                    state[n] = KEPT;
-                                    shape.push(n);
-                                }
-                            }
-                        }
+        // The whole shape, and its boundary (pixels with a side off the mask).
+        shape.clear();
+        seen[start] = true;
+        shape.push(start);
+        let mut k = 0;
+        let mut boundary = 0usize;
+        while k < shape.len() {
+            let j = shape[k];
+            k += 1;
+            let (ju, jv) = ((j as i64) % w, (j as i64) / w);
+            let mut edge = false;
+            for dv in -1..=1 {
+                for du in -1..=1 {
+                    let (nu, nv) = (ju + du, jv + dv);
+                    let inside = nu >= 0 && nv >= 0 && nu < w && nv < h;
+                    let set = inside && mask.data[(nv * w + nu) as usize];
+                    if !set && (du == 0 || dv == 0) {
+                        edge = true;
                     }
-                    boundary += usize::from(edge);
-                }
-                let width = 2.0 * shape.len() as f64 / boundary.max(1) as f64;
-                if !(width <= r.max_width) {
-                    for &j in &shape {
-                        state[j] = WIDE;
+                    if set {
+                        let n = (nv * w + nu) as usize;
+                        if !seen[n] {
+                            seen[n] = true;
+                            shape.push(n);
+                        }
                     }
                 }
             }
+            boundary += usize::from(edge);
+        }
+        let width = 2.0 * shape.len() as f64 / boundary.max(1) as f64;
+        if !(width <= max_width) {
+            wide += shape.len();
+            for &j in &shape {
+                kept.data[j] = false;
+            }
         }
     }
-    let mut kept = Mask::new(mask.width, mask.height);
-    for (k, s) in kept.data.iter_mut().zip(&state) {
-        *k = *s == KEPT;
-    }
-    let unclaimed = mask.count() - kept.count();
-    (kept, unclaimed)
+    (kept, wide)
 }
 
 #[cfg(test)]
@@ -779,38 +739,22 @@ mod tests {
     }
 
     #[test]
-    fn only_shapes_within_reach_are_kept() {
+    fn only_shapes_as_thin_as_asked_are_kept() {
         let mut mask = Mask::new(40, 20);
         for u in 2..30 {
-            mask.data[5 * 40 + u] = true; // a line, 28 px
+            mask.data[5 * 40 + u] = true; // a line 28 x 1: mean width 2 x 28 / 28 = 2
         }
         for v in 12..16 {
             for u in 30..36 {
-                mask.data[v * 40 + u] = true; // a block, 24 px
+                mask.data[v * 40 + u] = true; // a block 6 x 4: 2 x 24 / 16 = 3
             }
         }
-        let reach = |u: f64, r: f64| Reach {
-            centre: [u, 8.0],
-            radius: r,
-            max_width: 8.0,
-        };
-        // 3 px from the line's pixel (10, 5): the whole line, not the block.
-        let (kept, unclaimed) = shapes_within(&mask, &[reach(10.0, 3.0)]);
-        assert_eq!((kept.count(), unclaimed), (28, 24));
+        let (kept, wide) = shapes_no_wider(&mask, 2.5);
+        assert_eq!((kept.count(), wide), (28, 24));
         assert!(kept.get(29, 5) && !kept.get(31, 13));
-        let (_, unclaimed) = shapes_within(&mask, &[reach(10.0, 2.9)]);
-        assert_eq!(unclaimed, 52);
-        let (kept, _) = shapes_within(&mask, &[reach(10.0, 3.0), reach(33.0, 4.0)]);
-        assert_eq!(kept, mask);
-        let (_, unclaimed) = shapes_within(&mask, &[reach(f64::NAN, 3.0), reach(10.0, -1.0)]);
-        assert_eq!(unclaimed, 52);
-        // The block (6 x 4: mean width 2 x 24 / 16 = 3) is too wide for 2.5.
-        let narrow = Reach {
-            max_width: 2.5,
-            ..reach(33.0, 4.0)
-        };
-        let (kept, unclaimed) = shapes_within(&mask, &[reach(10.0, 3.0), narrow]);
-        assert_eq!((kept.count(), unclaimed), (28, 24));
+        assert_eq!(shapes_no_wider(&mask, 3.0), (mask.clone(), 0));
+        assert_eq!(shapes_no_wider(&mask, f64::NAN).1, 52);
+        assert_eq!(shapes_no_wider(&mask, 1.9).1, 52);
     }
 
     #[test]

@@ -17,7 +17,7 @@ use crate::perception::initialisation::{
 };
 use crate::perception::point_cloud::build_cloud;
 use crate::perception::segmentation::{
-    segment, shapes_within, HsvRange, Mask, Reach, Rect, SegmentationError,
+    segment, shapes_no_wider, HsvRange, Mask, Rect, SegmentationError,
 };
 use crate::polyline::{polyline_length, resample_uniform};
 use crate::step::{Algorithm, StepInput};
@@ -137,14 +137,13 @@ pub struct Observation {
     /// The rope mask after occlusion rectangles.
     pub mask: Mask,
     /// The downsampled cloud on the rope's centre line, metres: of the
-    /// mask's shapes within reach of the tracked rope (all of them when
-    /// there is no tracked rope).
+    /// mask's shapes no wider than the tracked rope allows (all of them
+    /// when there is no tracked rope).
     pub cloud: Vec<Vec3>,
     /// The occlusion rectangles blacked out in this frame.
     pub occlusions: Vec<Rect>,
-    /// Mask pixels in shapes out of the tracked rope's reach, left out of
-    /// `cloud` (0 when there is no tracked rope).
-    pub unclaimed: usize,
+    /// Mask pixels in shapes too wide to be the rope, left out of `cloud`.
+    pub too_wide: usize,
 }
 
 impl Observation {
@@ -155,18 +154,18 @@ impl Observation {
             mask,
             cloud: cloud.points,
             occlusions: occlusions.to_vec(),
-            unclaimed: cloud.unclaimed,
+            too_wide: cloud.too_wide,
         }
     }
 }
 
-/// The cloud of the shapes of a mask within reach of the tracked rope.
+/// The cloud of the shapes of a mask that can be the tracked rope.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RopeCloud {
     /// Points, metres.
     pub points: Vec<Vec3>,
-    /// Mask pixels in shapes out of reach, whose points were left out.
-    pub unclaimed: usize,
+    /// Mask pixels in shapes too wide to be the rope, left out.
+    pub too_wide: usize,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -189,8 +188,6 @@ pub struct TrackerSnapshot {
     rest_length: Option<f64>,
     #[cfg_attr(feature = "serde", serde(default))]
     refused_jump_cloud: Option<usize>,
-    #[cfg_attr(feature = "serde", serde(default))]
-    unclaimed_known: Option<usize>,
     stepper: Stepper,
 }
 
@@ -211,9 +208,6 @@ pub struct Tracker {
     /// Cloud size at the last refused jump re-initialisation, while fewer
     /// than `reinit_visible_fraction` of the nodes stay visible.
     refused_jump_cloud: Option<usize>,
-    /// Unclaimed mask pixels when a re-initialisation last found the rope
-    /// where it was tracked (those shapes are not the rope).
-    unclaimed_known: Option<usize>,
     /// The per-frame step of `params.algorithm`.
     stepper: Stepper,
     /// What the user knows of the rope.
@@ -241,7 +235,6 @@ impl Tracker {
             known_radius: None,
             rest_length: None,
             refused_jump_cloud: None,
-            unclaimed_known: None,
             stepper: Stepper::new(params.algorithm),
             prior: RopePrior::default(),
             hint: None,
@@ -263,9 +256,9 @@ impl Tracker {
         &self.prior
     }
 
-    /// A pixel `(u, v)` on the rope the user clicked: initialisations take
-    /// the rope-shaped candidate through it (`None` forgets it). Call
-    /// [`Tracker::reset`] to initialise again from the next frame.
+    /// A pixel `(u, v)` on the rope the user clicked: an initialisation
+    /// without a state (the first, or the next after [`Tracker::reset`])
+    /// takes the rope-shaped candidate through it; `None` forgets it.
     pub fn set_rope_hint(&mut self, hint: Option<[f64; 2]>) {
         self.hint = hint
             .filter(|h| h.iter().all(|c| c.is_finite()))
@@ -328,7 +321,6 @@ impl Tracker {
             known_radius: self.known_radius,
             rest_length: self.rest_length,
             refused_jump_cloud: self.refused_jump_cloud,
-            unclaimed_known: self.unclaimed_known,
             stepper: self.stepper.clone(),
         }
     }
@@ -349,7 +341,6 @@ impl Tracker {
         self.known_radius = snapshot.known_radius;
         self.rest_length = snapshot.rest_length;
         self.refused_jump_cloud = snapshot.refused_jump_cloud;
-        self.unclaimed_known = snapshot.unclaimed_known;
         self.stepper = snapshot.stepper;
         if restart {
             self.stepper = Stepper::new(self.params.algorithm);
@@ -365,7 +356,6 @@ impl Tracker {
         self.known_radius = None;
         self.rest_length = None;
         self.refused_jump_cloud = None;
-        self.unclaimed_known = None;
         self.stepper = Stepper::new(self.params.algorithm);
     }
 
@@ -389,43 +379,34 @@ impl Tracker {
 
     /// The second stage of [`Tracker::observe`]: the point cloud of the
     /// masked pixels (`mask` from [`Tracker::segment`] on the same frame).
-    /// While a rope is tracked, only the mask's shapes within
-    /// [`UNEXPLAINED_REACH`] visibility radii of one of its nodes, and no
-    /// wider on average than [`DIAMETER_PRIOR_FACTOR`] times the rope, are
-    /// the rope's: another shape is something else in the colour range (a
-    /// phone beside a black cable), and its pixels are counted as
-    /// unclaimed instead.
+    /// While a rope is tracked, a shape of the mask wider on average than
+    /// [`DIAMETER_PRIOR_FACTOR`] times the rope (at its nearest node) is
+    /// something else in the colour range, a phone beside a black cable or
+    /// a hand: its pixels are left out and counted.
     pub fn cloud(&self, frame: &Frame<'_>, mask: &Mask) -> RopeCloud {
         let settings = self.cloud_settings();
-        let nodes = match &self.state {
-            Some(s) if !s.lost => s.nodes.as_slice(),
-            _ => &[],
+        let nearest = match &self.state {
+            Some(s) if !s.lost => s
+                .nodes
+                .iter()
+                .map(|n| n.z)
+                .filter(|z| *z > 0.0)
+                .fold(f64::INFINITY, f64::min),
+            _ => f64::INFINITY,
         };
-        let reach = UNEXPLAINED_REACH * self.params.visibility_radius;
-        let f = self.camera.fx.max(self.camera.fy);
-        let widest = DIAMETER_PRIOR_FACTOR * 2.0 * self.radius();
-        let reaches: Vec<Reach> = nodes
-            .iter()
-            .filter_map(|n| {
-                let p = self.camera.project(n)?;
-                Some(Reach {
-                    centre: [p.x, p.y],
-                    radius: reach * f / n.z,
-                    max_width: widest * f / n.z,
-                })
-            })
-            .collect();
-        if reaches.is_empty() {
+        if !nearest.is_finite() {
             return RopeCloud {
                 points: build_cloud(frame, mask, &self.camera, &settings),
-                unclaimed: 0,
+                too_wide: 0,
             };
         }
-        let (rope, unclaimed) = shapes_within(mask, &reaches);
-        let source = if unclaimed == 0 { mask } else { &rope };
+        let f = self.camera.fx.max(self.camera.fy);
+        let widest = DIAMETER_PRIOR_FACTOR * 2.0 * self.radius() * f / nearest;
+        let (rope, too_wide) = shapes_no_wider(mask, widest);
+        let source = if too_wide == 0 { mask } else { &rope };
         RopeCloud {
             points: build_cloud(frame, source, &self.camera, &settings),
-            unclaimed,
+            too_wide,
         }
     }
 
@@ -484,20 +465,10 @@ impl Tracker {
         let camera = self.camera;
         let input = self.step_input(&camera, frame, obs, &prev, &classes);
         let out = self.stepper.step(&input, &self.params);
-        let verdict = self.contradiction(&out.nodes, obs, &out.report);
-        if verdict != Contradiction::None {
-            if let Ok(init) = self.find_rope(frame, obs) {
-                // Shapes out of reach that are not the rope: initialisation
-                // finds the rope where it is tracked. They are not asked
-                // about again until they grow.
-                let same = mean_distance(&init.nodes, &out.nodes) < self.params.visibility_radius;
-                if verdict == Contradiction::Unclaimed && same {
-                    self.unclaimed_known = Some(obs.unclaimed);
-                } else {
-                    let mut again = self.adopt(init, frame, obs);
-                    again.status = FrameStatus::Recovered;
-                    return again;
-                }
+        if self.contradicts_evidence(&out.nodes, &obs.cloud, &out.report) {
+            if let Ok(mut again) = self.try_initialise(frame, obs) {
+                again.status = FrameStatus::Recovered;
+                return again;
             }
         }
         self.state = Some(TrackState {
@@ -554,20 +525,11 @@ impl Tracker {
         }
     }
 
-    /// Why the nodes after a step cannot be the rope in these images: the
-    /// rope stretched past [`STRETCH_LIMIT`] of its length, most hidden
-    /// nodes left in free space, more than [`UNEXPLAINED_LIMIT`] of the
-    /// cloud far from every node, or more than that share of the mask in
-    /// shapes out of the rope's reach (unless a re-initialisation found
-    /// them not to be the rope, and they have not grown by
-    /// [`JUMP_RETRY_GROWTH`] since).
-    fn contradiction(
-        &self,
-        nodes: &[Vec3],
-        obs: &Observation,
-        report: &StepReports,
-    ) -> Contradiction {
-        let cloud = &obs.cloud;
+    /// `true` when the nodes after a step cannot be the rope in these
+    /// images: the rope stretched past [`STRETCH_LIMIT`] of its length,
+    /// most hidden nodes left in free space, or more than
+    /// [`UNEXPLAINED_LIMIT`] of the cloud far from every node.
+    fn contradicts_evidence(&self, nodes: &[Vec3], cloud: &[Vec3], report: &StepReports) -> bool {
         let stretched = self
             .rest_length
             .is_some_and(|l| polyline_length(nodes) > STRETCH_LIMIT * l);
@@ -584,19 +546,7 @@ impl Tracker {
             })
             .count();
         let unexplained = !cloud.is_empty() && far as f64 > UNEXPLAINED_LIMIT * cloud.len() as f64;
-        if stretched || in_free_space || unexplained {
-            return Contradiction::Images;
-        }
-        let segmented = obs.mask.count().max(1) as f64;
-        let unclaimed = obs.unclaimed as f64 > UNEXPLAINED_LIMIT * segmented;
-        let known = self
-            .unclaimed_known
-            .is_some_and(|n| obs.unclaimed as f64 <= n as f64 * (1.0 + JUMP_RETRY_GROWTH));
-        if unclaimed && !known {
-            Contradiction::Unclaimed
-        } else {
-            Contradiction::None
-        }
+        stretched || in_free_space || unexplained
     }
 
     /// [`Tracker::observe`] then [`Tracker::update`].
@@ -631,9 +581,11 @@ impl Tracker {
             Some(s) => s.nodes.as_slice(),
             None => &[],
         };
+        // A click chooses the rope on the frame it was made on (a tracker
+        // without a state); after a loss the rope is found near where it was.
         let guide = InitGuide {
             prior: self.prior,
-            hint: self.hint,
+            hint: self.hint.filter(|_| self.state.is_none()),
             previous,
             min_length: known.map_or(0.0, |k| self.params.reinit_length_fraction * k),
         };
@@ -660,10 +612,10 @@ impl Tracker {
                 self.radius(),
             ));
         }
-        // The cloud was of the old state's shapes: the new nodes are
-        // judged against the whole mask's.
+        // The cloud left out shapes too wide for the old state's rope: the
+        // new nodes are judged against the whole mask's.
         let whole;
-        let cloud = if obs.unclaimed > 0 {
+        let cloud = if obs.too_wide > 0 {
             whole = build_cloud(frame, &obs.mask, &self.camera, &self.cloud_settings());
             &whole
         } else {
@@ -678,7 +630,6 @@ impl Tracker {
             p.visibility_min_fraction,
         );
         self.refused_jump_cloud = None;
-        self.unclaimed_known = None;
         self.state = Some(TrackState {
             nodes: init.nodes.clone(),
             lost: false,
@@ -731,30 +682,6 @@ impl Tracker {
     pub fn current_length(&self) -> f64 {
         polyline_length(self.nodes())
     }
-}
-
-/// What contradicts a step's nodes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Contradiction {
-    /// Nothing.
-    None,
-    /// The images (stretched, free space, unexplained cloud).
-    Images,
-    /// Shapes out of the rope's reach hold much of the mask.
-    Unclaimed,
-}
-
-/// Mean distance from each of `a` to the nearest of `b`.
-fn mean_distance(a: &[Vec3], b: &[Vec3]) -> f64 {
-    let sum: f64 = a
-        .iter()
-        .map(|p| {
-            b.iter()
-                .map(|q| (p - q).norm())
-                .fold(f64::INFINITY, f64::min)
-        })
-        .sum();
-    sum / a.len().max(1) as f64
 }
 
 /// Why a re-initialisation attempt failed.
