@@ -56,7 +56,7 @@ fn assert_whole(kind: ScenarioKind, c: &Candidate, truth: f64) {
 #[test]
 fn a_black_cable_beside_a_phone_is_found_and_tracked() {
     let kind = ScenarioKind::CableDesk;
-    for algorithm in [Algorithm::Upetrack, Algorithm::Cpd, Algorithm::TrackDlo] {
+    for algorithm in [Algorithm::Upetrack, Algorithm::Cpd, Algorithm::Trackdlo] {
         let (c, truth, errors) = found_and_tracked(kind, kind.default_variant(), 40, algorithm);
         assert_whole(kind, &c, truth);
         // The cable (5 mm), not the phone (7 cm).

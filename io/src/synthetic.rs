@@ -85,7 +85,7 @@ impl SyntheticWriter {
                 })
                 .collect(),
             groundtruth: Some("groundtruth.json".into()),
-            rope: self.rope_prior.then(|| RopeConfig {
+            rope: self.rope_prior.then_some(RopeConfig {
                 length_m: Some(s.rope.settings.length),
                 diameter_m: Some(s.rope.settings.thickness),
             }),

@@ -431,58 +431,91 @@ pub fn segment(frame: &Frame<'_>, range: &HsvRange, occlusions: &[Rect]) -> Mask
     mask
 }
 
-/// The shapes of `mask` (8-connected) no wider on average than `max_width`
-/// pixels (twice a shape's area over its perimeter: a strip's width), and
-/// how many of `mask`'s pixels lie in the wider ones.
-pub fn shapes_no_wider(mask: &Mask, max_width: f64) -> (Mask, usize) {
+/// The parts of `mask` wider than `max_width` pixels, taken out: where a
+/// disc of that diameter fits (its centre has mask pixels at half the
+/// diameter in all eight directions; centres looked for on a grid of a
+/// quarter of the diameter), the mask pixels within half the diameter and
+/// a grid step of such a centre, through the mask. `None` when no part is that
+/// wide (the mask stays as it is); else the mask without them, and how many
+/// pixels were taken out. A thin rope, even where it crosses itself, has
+/// no such part; a phone beside it does, and a rope touching the phone
+/// loses only what lies within that reach of it.
+pub fn without_wide_parts(mask: &Mask, max_width: f64) -> Option<(Mask, usize)> {
+    if !(max_width >= 2.0) {
+        return None;
+    }
+    let r = libm::round(0.5 * max_width).min(f64::from(u8::MAX / 2)) as i64;
     let (w, h) = (mask.width as i64, mask.height as i64);
+    if 2 * r >= w || 2 * r >= h {
+        return None;
+    }
+    // Centres are looked for on a grid of half the radius (the centres of
+    // a part wider than the diameter fill a region, which the grid meets
+    // unless the part is barely wider): 1 / s^2 of the pixels, nine
+    // lookups each.
+    let step = (r / 2).max(1);
+    let at = |u: i64, v: i64| mask.data[(v * w + u) as usize];
+    let mut queue = Vec::new();
+    let mut v = r;
+    while v < h - r {
+        let mut u = r;
+        while u < w - r {
+            if at(u, v)
+                && at(u - r, v)
+                && at(u + r, v)
+                && at(u, v - r)
+                && at(u, v + r)
+                && at(u - r, v - r)
+                && at(u + r, v - r)
+                && at(u - r, v + r)
+                && at(u + r, v + r)
+            {
+                queue.push((v * w + u) as usize);
+            }
+            u += step;
+        }
+        v += step;
+    }
+    // The pixels between grid centres are within a grid step more.
+    let r = r + step;
+    if queue.is_empty() {
+        return None;
+    }
+    // Steps from the nearest centre, through the mask, up to r: a pixel
+    // taken out of `kept` is visited. Entries carry their column and row
+    // (no division per pixel).
     let mut kept = mask.clone();
-    let mut seen = vec![false; mask.data.len()];
-    let mut shape = Vec::new();
-    let mut wide = 0;
-    for start in 0..mask.data.len() {
-        if !mask.data[start] || seen[start] {
+    let (wu, hu) = (w as usize, h as usize);
+    let mut todo: Vec<(usize, usize, usize, u8)> =
+        queue.iter().map(|&i| (i, i % wu, i / wu, 0u8)).collect();
+    for &i in &queue {
+        kept.data[i] = false;
+    }
+    let mut k = 0;
+    while k < todo.len() {
+        let (i, u, v, at_step) = todo[k];
+        k += 1;
+        let next = at_step + 1;
+        if i64::from(next) > r {
             continue;
         }
-        // The whole shape, and its boundary (pixels with a side off the mask).
-        shape.clear();
-        seen[start] = true;
-        shape.push(start);
-        let mut k = 0;
-        let mut boundary = 0usize;
-        while k < shape.len() {
-            let j = shape[k];
-            k += 1;
-            let (ju, jv) = ((j as i64) % w, (j as i64) / w);
-            let mut edge = false;
-            for dv in -1..=1 {
-                for du in -1..=1 {
-                    let (nu, nv) = (ju + du, jv + dv);
-                    let inside = nu >= 0 && nv >= 0 && nu < w && nv < h;
-                    let set = inside && mask.data[(nv * w + nu) as usize];
-                    if !set && (du == 0 || dv == 0) {
-                        edge = true;
-                    }
-                    if set {
-                        let n = (nv * w + nu) as usize;
-                        if !seen[n] {
-                            seen[n] = true;
-                            shape.push(n);
-                        }
-                    }
-                }
-            }
-            boundary += usize::from(edge);
-        }
-        let width = 2.0 * shape.len() as f64 / boundary.max(1) as f64;
-        if !(width <= max_width) {
-            wide += shape.len();
-            for &j in &shape {
+        // Side neighbours: the centres are a grid step apart, the reach a
+        // grid step longer than the radius, so the diagonals are covered.
+        let sides = [
+            (u > 0).then(|| (i - 1, u - 1, v)),
+            (u + 1 < wu).then(|| (i + 1, u + 1, v)),
+            (v > 0).then(|| (i - wu, u, v - 1)),
+            (v + 1 < hu).then(|| (i + wu, u, v + 1)),
+        ];
+        for (j, ju, jv) in sides.into_iter().flatten() {
+            if kept.data[j] {
                 kept.data[j] = false;
+                todo.push((j, ju, jv, next));
             }
         }
     }
-    (kept, wide)
+    let taken = todo.len();
+    Some((kept, taken))
 }
 
 #[cfg(test)]
@@ -738,23 +771,42 @@ mod tests {
         assert!(!grey.contains(rgb_to_hsv([20, 20, 20])));
     }
 
+    /// A 5 px line crossing another at right angles, and touching a 40 x
+    /// 30 block: the block goes, the lines stay but for the pixels within
+    /// reach of the block's wide part.
     #[test]
-    fn only_shapes_as_thin_as_asked_are_kept() {
-        let mut mask = Mask::new(40, 20);
-        for u in 2..30 {
-            mask.data[5 * 40 + u] = true; // a line 28 x 1: mean width 2 x 28 / 28 = 2
-        }
-        for v in 12..16 {
-            for u in 30..36 {
-                mask.data[v * 40 + u] = true; // a block 6 x 4: 2 x 24 / 16 = 3
+    fn wide_parts_go_and_thin_crossing_lines_stay() {
+        let (w, h) = (120usize, 80usize);
+        let mut mask = Mask::new(w as u32, h as u32);
+        let mut set = |u0: usize, u1: usize, v0: usize, v1: usize| {
+            for v in v0..v1 {
+                for u in u0..u1 {
+                    mask.data[v * w + u] = true;
+                }
+            }
+        };
+        set(5, 100, 20, 25); // horizontal line, 5 px
+        set(40, 45, 2, 78); // vertical line crossing it
+        set(70, 110, 25, 55); // block touching the horizontal line from below
+        let before = mask.count();
+        // A rope 5 px wide: parts wider than 10 px go.
+        let (kept, gone) = without_wide_parts(&mask, 10.0).expect("the block is wide");
+        assert_eq!(kept.count() + gone, before);
+        assert!(!kept.get(90, 40), "the block's middle stays");
+        assert!(kept.get(42, 22), "the crossing went");
+        assert!(kept.get(20, 22) && kept.get(42, 70), "the lines went");
+        // The block: 1200 px; what goes is the block and the line's pixels
+        // within 5 steps of it.
+        assert!((1200..1200 + 5 * 5 * 10).contains(&gone), "{gone}");
+        // Thin lines alone: nothing to take out.
+        let mut lines = kept.clone();
+        for v in 25..55 {
+            for u in 70..110 {
+                lines.data[v * w + u] = false;
             }
         }
-        let (kept, wide) = shapes_no_wider(&mask, 2.5);
-        assert_eq!((kept.count(), wide), (28, 24));
-        assert!(kept.get(29, 5) && !kept.get(31, 13));
-        assert_eq!(shapes_no_wider(&mask, 3.0), (mask.clone(), 0));
-        assert_eq!(shapes_no_wider(&mask, f64::NAN).1, 52);
-        assert_eq!(shapes_no_wider(&mask, 1.9).1, 52);
+        assert!(without_wide_parts(&lines, 10.0).is_none());
+        assert!(without_wide_parts(&mask, f64::NAN).is_none());
     }
 
     #[test]

@@ -17,7 +17,7 @@ use crate::perception::initialisation::{
 };
 use crate::perception::point_cloud::build_cloud;
 use crate::perception::segmentation::{
-    segment, shapes_no_wider, HsvRange, Mask, Rect, SegmentationError,
+    segment, without_wide_parts, HsvRange, Mask, Rect, SegmentationError,
 };
 use crate::polyline::{polyline_length, resample_uniform};
 use crate::step::{Algorithm, StepInput};
@@ -137,12 +137,12 @@ pub struct Observation {
     /// The rope mask after occlusion rectangles.
     pub mask: Mask,
     /// The downsampled cloud on the rope's centre line, metres: of the
-    /// mask's shapes no wider than the tracked rope allows (all of them
-    /// when there is no tracked rope).
+    /// mask's parts no wider than the tracked rope allows (all of them when
+    /// there is no tracked rope).
     pub cloud: Vec<Vec3>,
     /// The occlusion rectangles blacked out in this frame.
     pub occlusions: Vec<Rect>,
-    /// Mask pixels in shapes too wide to be the rope, left out of `cloud`.
+    /// Mask pixels in parts too wide to be the rope, left out of `cloud`.
     pub too_wide: usize,
 }
 
@@ -159,12 +159,12 @@ impl Observation {
     }
 }
 
-/// The cloud of the shapes of a mask that can be the tracked rope.
+/// The cloud of the parts of a mask that can be the tracked rope.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RopeCloud {
     /// Points, metres.
     pub points: Vec<Vec3>,
-    /// Mask pixels in shapes too wide to be the rope, left out.
+    /// Mask pixels in parts too wide to be the rope, left out.
     pub too_wide: usize,
 }
 
@@ -379,7 +379,7 @@ impl Tracker {
 
     /// The second stage of [`Tracker::observe`]: the point cloud of the
     /// masked pixels (`mask` from [`Tracker::segment`] on the same frame).
-    /// While a rope is tracked, a shape of the mask wider on average than
+    /// While a rope is tracked, a part of the mask wider than
     /// [`DIAMETER_PRIOR_FACTOR`] times the rope (at its nearest node) is
     /// something else in the colour range, a phone beside a black cable or
     /// a hand: its pixels are left out and counted.
@@ -402,11 +402,15 @@ impl Tracker {
         }
         let f = self.camera.fx.max(self.camera.fy);
         let widest = DIAMETER_PRIOR_FACTOR * 2.0 * self.radius() * f / nearest;
-        let (rope, too_wide) = shapes_no_wider(mask, widest);
-        let source = if too_wide == 0 { mask } else { &rope };
-        RopeCloud {
-            points: build_cloud(frame, source, &self.camera, &settings),
-            too_wide,
+        match without_wide_parts(mask, widest) {
+            None => RopeCloud {
+                points: build_cloud(frame, mask, &self.camera, &settings),
+                too_wide: 0,
+            },
+            Some((rope, too_wide)) => RopeCloud {
+                points: build_cloud(frame, &rope, &self.camera, &settings),
+                too_wide,
+            },
         }
     }
 
@@ -612,7 +616,7 @@ impl Tracker {
                 self.radius(),
             ));
         }
-        // The cloud left out shapes too wide for the old state's rope: the
+        // The cloud left out parts too wide for the old state's rope: the
         // new nodes are judged against the whole mask's.
         let whole;
         let cloud = if obs.too_wide > 0 {

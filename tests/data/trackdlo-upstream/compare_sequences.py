@@ -18,6 +18,12 @@ edge drawing the ROS node uses. For each sequence folder given it then
 
 KEEP_DIR=<dir> keeps the built driver and both result files there.
 
+UPSTREAM_INIT=<python> runs upstream's own initialiser instead
+(upstream_init.py: initialize.py without ROS, with that interpreter, which
+needs numpy, scipy, opencv-python-headless, scikit-image and pillow): then
+the upstream row is upstream's whole pipeline, its initialiser included,
+and the table adds UPETrack's own result on the same frames.
+
 Single-colour mode with the sequence's own HSV range (the evaluation launch
 file's multi-colour thresholds are fixed to blue, red and yellow ropes).
 """
@@ -87,6 +93,19 @@ def main():
             subprocess.run([UPETRACK, "track", seq, "--params", "trackdlo-upstream", "--out", ours],
                            check=True, stderr=subprocess.DEVNULL)
             init = json.load(open(ours))["frames"][0]["nodes"]
+            python = os.environ.get("UPSTREAM_INIT")
+            extra = []
+            if python:
+                r = subprocess.run([python, os.path.join(HERE, "upstream_init.py"), seq, str(len(init))],
+                                   capture_output=True, text=True)
+                if r.returncode != 0:
+                    last = r.stderr.strip().splitlines()[-1:] or ["no message"]
+                    print(f"{name}: upstream's initialiser failed: {last[0]}", file=sys.stderr)
+                    continue
+                init = json.loads(r.stdout)
+                upe = os.path.join(tmp, f"{name}.upetrack.json")
+                subprocess.run([UPETRACK, "track", seq, "--out", upe], check=True, stderr=subprocess.DEVNULL)
+                extra = [upe]
             upstream = os.path.join(tmp, f"{name}.upstream.json")
             with open(upstream, "w") as out:
                 r = subprocess.run([exe], input=job(seq, init), stdout=out, stderr=subprocess.PIPE, text=True)
@@ -95,7 +114,7 @@ def main():
             if r.returncode != 0:
                 print(f"{name}: upstream stopped: {r.stderr.strip()}", file=sys.stderr)
                 continue
-            table = subprocess.run([UPETRACK, "score", seq, upstream, ours], check=True,
+            table = subprocess.run([UPETRACK, "score", seq, upstream, ours, *extra], check=True,
                                    capture_output=True, text=True).stdout
             rows = [l for l in table.splitlines() if l.startswith("|")]
             if seq == seqs[0]:

@@ -570,7 +570,7 @@ pub(super) fn join(pieces: &[Piece], metric: bool) -> Vec<Chain> {
             placed[p] = true;
             // Traversed from `free_head`'s end to the other.
             parts.push((p, !free_head));
-            cur = next[p][slot(!free_head)].map(|(q, h)| (q, h));
+            cur = next[p][slot(!free_head)];
         }
         chains.push(lay_out(pieces, &parts, metric));
     }

@@ -448,7 +448,7 @@ fn find(
         }
         reason.is_none()
     });
-    set_aside.sort_by(|a, b| b.pixels.cmp(&a.pixels));
+    set_aside.sort_by_key(|s| core::cmp::Reverse(s.pixels));
     Found {
         chains,
         set_aside,
