@@ -18,7 +18,7 @@ export function noteRopeFinding(k, r) {
   if (notedEpoch === state.epoch) return;
   const init = r.init;
   let text = null;
-  if (init && (init.candidates.length > 1 || init.hint_missed)) {
+  if (init && ((init.candidates.length > 1 && init.rule !== 'clicked') || init.hint_missed)) {
     const c = init.candidates[init.chosen];
     const how = init.rule === 'clicked' ? 'the one clicked' : init.rule === 'nearest_previous' ? 'the one nearest the rope tracked before' : 'the longest';
     text = `Frame ${k}: ${init.candidates.length} rope-shaped candidates in the colour range; tracking ${how} ` +

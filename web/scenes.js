@@ -32,7 +32,8 @@ function fill(select, items) {
 export function bindScenePanel() {
   const c = sceneChoices();
   fill($('scene-scenario'), c.scenarios);
-  fill($('scene-variant'), c.variants);
+  fill($('scene-variant'), [{ name: '' }, ...c.variants]);
+  $('scene-variant').options[0].textContent = "the scenario's own";
   fill($('scene-colour'), [{ name: '' }, ...c.colours.map((name) => ({ name }))]);
   $('scene-colour').options[0].textContent = "the variant's";
   $('scene-scenario').value = FIRST_SCENARIO;
@@ -48,12 +49,12 @@ export function bindScenePanel() {
   $('scene-make').onclick = guarded(async () => {
     const options = {
       scenario: $('scene-scenario').value,
-      variant: $('scene-variant').value,
       frames: Number($('scene-frames').value),
       seed: Number($('scene-seed').value),
       occluder_scale: Number($('scene-occluder').value),
       pull_scale: Number($('scene-pull').value),
     };
+    if ($('scene-variant').value) options.variant = $('scene-variant').value;
     if ($('scene-colour').value) options.rope_colour = $('scene-colour').value;
     $('scene-make').disabled = true;
     try {

@@ -518,6 +518,21 @@ await test('the opening look: the page as it is plays 150 frames of a rope pulle
   await page.close();
 });
 
+// Makes a scene with the page's generator and waits for its first frame.
+async function makeScene(page, { scenario, variant, frames, seed }) {
+  await page.evaluate(async ([scenario, variant, frames, seed]) => {
+    const u = window.upetrack;
+    document.getElementById('scene-panel').open = true;
+    document.getElementById('scene-scenario').value = scenario;
+    document.getElementById('scene-variant').value = variant;
+    document.getElementById('scene-frames').value = String(frames);
+    document.getElementById('scene-seed').value = String(seed);
+    document.getElementById('scene-make').click();
+    const name = `${scenario} (seed ${seed})`;
+    while (!u.state.seq || u.state.seq.name !== name || u.state.tracked < 0) await new Promise((res) => setTimeout(res, 50));
+  }, [scenario, variant, frames, seed]);
+}
+
 await test('a scene made in the tab has its ground truth and tracks as the command\'s synth of it does', async () => {
   const dir = path.join(tmp, 'made-tip-drag');
   execFileSync(native, ['synth', 'tip-drag', dir, '--frames', '20', '--seed', '5', '--variant', 'near-thin-green']);
@@ -525,15 +540,9 @@ await test('a scene made in the tab has its ground truth and tracks as the comma
   execFileSync(native, ['track', dir, '--out', out]);
   const ref = JSON.parse(fs.readFileSync(out, 'utf8'));
   const page = await newPage('?autoplay=0');
+  await makeScene(page, { scenario: 'tip-drag', variant: 'near-thin-green', frames: 20, seed: 5 });
   const r = await page.evaluate(async () => {
     const u = window.upetrack;
-    document.getElementById('scene-panel').open = true;
-    document.getElementById('scene-scenario').value = 'tip-drag';
-    document.getElementById('scene-variant').value = 'near-thin-green';
-    document.getElementById('scene-frames').value = '20';
-    document.getElementById('scene-seed').value = '5';
-    document.getElementById('scene-make').click();
-    while (!u.state.seq || u.state.seq.name !== 'tip-drag (seed 5)') await new Promise((res) => setTimeout(res, 50));
     const result = await u.trackAll();
     return { frames: result.frames.map((f) => f.nodes), gt: u.state.seq.info.groundtruth.filter(Boolean).length, w: u.state.seq.info.camera.width };
   });
@@ -541,6 +550,47 @@ await test('a scene made in the tab has its ground truth and tracks as the comma
   ref.frames.forEach((f, k) => f.nodes.forEach((p, j) => p.forEach((c, d) => { worst = Math.max(worst, Math.abs(c - r.frames[k][j][d])); })));
   assert(r.frames.length === 20 && r.gt === 20 && worst === 0, `made in the tab: ${r.frames.length} frames, ${r.gt} with ground truth, ${worst} m from the command's`);
   await page.screenshot({ path: path.join(artifacts, 'scene.png') });
+  await page.close();
+});
+
+await test('finding the rope: a black cable beside a phone is found, a click chooses another candidate and back, the rope\'s size is saved', async () => {
+  const page = await newPage('?autoplay=0');
+  await makeScene(page, { scenario: 'cable-desk', variant: '', frames: 4, seed: 1 });
+  const made = await page.evaluate(async () => {
+    const u = window.upetrack;
+    const r = u.state.results[0];
+    return { init: r.init, error: r.error, node: [Math.round(r.nodesPx[10]), Math.round(r.nodesPx[11])], message: document.getElementById('message').hidden ? '' : document.getElementById('message-text').textContent };
+  });
+  const cable = made.init.candidates[made.init.chosen];
+  assert(made.error[0] < 10 && cable.diameter < 0.008 && made.init.rule === 'longest', `the cable is not the one found: ${JSON.stringify(made)}`);
+  assert(/2 rope-shaped candidates/.test(made.message), `no note on the choice: ${made.message}`);
+  // Click on the other candidate (the pen): it is taken, then the cable again.
+  const other = made.init.candidates[1 - made.init.chosen];
+  const mid = (c) => [Math.round((c.ends[0][0] + c.ends[1][0]) / 2), Math.round((c.ends[0][1] + c.ends[1][1]) / 2)];
+  const choose = (xy) => page.evaluate(async ([x, y]) => {
+    const u = window.upetrack;
+    await u.pickAt(x, y);
+    await u.state.busy;
+    const r = u.state.results[u.state.index];
+    return { rule: r.init && r.init.rule, length: r.init && r.init.candidates[r.init.chosen].length, error: r.error[0], hsv: u.state.hsv };
+  }, xy);
+  const pen = await choose(mid(other)); // a straight pen: its middle is on it
+  assert(pen.rule === 'clicked' && Math.abs(pen.length - other.length) < 0.02 && pen.hsv.upper[2] < 100, `clicking the pen: ${JSON.stringify(pen)}`);
+  const back = await choose(made.node); // a node found on the cable
+  assert(back.rule === 'clicked' && back.error < 10, `clicking the cable: ${JSON.stringify(back)}`);
+  // The rope's size: the prior is judged (the ratio reported) and saved.
+  const sized = await page.evaluate(async () => {
+    const u = window.upetrack;
+    document.getElementById('rope-length').value = '1.0';
+    document.getElementById('rope-diameter').value = '5';
+    document.getElementById('rope').dispatchEvent(new Event('change'));
+    await new Promise((res) => setTimeout(res, 50));
+    await u.state.busy;
+    const r = u.state.results[u.state.index];
+    return { ratio: r.init && r.init.prior_length_ratio, dlo: u.dloJson() };
+  });
+  assert(Math.abs(sized.ratio - 1) < 0.05 && sized.dlo.rope.length_m === 1 && sized.dlo.rope.diameter_m === 0.005, `the rope's size: ${JSON.stringify(sized)}`);
+  await page.screenshot({ path: path.join(artifacts, 'finding.png') });
   await page.close();
 });
 

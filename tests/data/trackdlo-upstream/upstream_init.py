@@ -12,7 +12,6 @@ from the registry). The upstream sources are read, never copied: set
 TRACKDLO_UPSTREAM, else ../shared/upstream/trackdlo beside the repository.
 """
 import contextlib
-import glob
 import json
 import os
 import sys
@@ -60,20 +59,13 @@ def stub_ros(captured):
     return errors
 
 
-def frames_of(seq, names, exts):
-    for n in names:
-        d = os.path.join(seq, n)
-        if os.path.isdir(d):
-            return sorted(p for p in glob.glob(os.path.join(d, "*")) if p.lower().endswith(exts))
-    raise SystemExit(f"{seq}: no {names[0]} folder")
-
-
 def main():
     if len(sys.argv) != 3:
         raise SystemExit(__doc__)
     seq, nodes = sys.argv[1], int(sys.argv[2])
     captured = []
     errors = stub_ros(captured)
+    from compare_sequences import frames_of
     sys.path.insert(0, os.path.join(UPSTREAM, "trackdlo", "src"))
     import cv2
     import numpy as np
