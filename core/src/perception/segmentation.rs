@@ -435,7 +435,7 @@ pub fn segment(frame: &Frame<'_>, range: &HsvRange, occlusions: &[Rect]) -> Mask
 /// disc of that diameter fits (its centre has mask pixels at half the
 /// diameter in all eight directions; centres looked for on a grid of a
 /// quarter of the diameter), the mask pixels within half the diameter and
-/// a grid step of such a centre, through the mask. `None` when no part is that
+/// a grid step of such a centre (eight-neighbour steps through the mask). `None` when no part is that
 /// wide (the mask stays as it is); else the mask without them, and how many
 /// pixels were taken out. A thin rope, even where it crosses itself, has
 /// no such part; a phone beside it does, and a rope touching the phone
@@ -499,13 +499,21 @@ pub fn without_wide_parts(mask: &Mask, max_width: f64) -> Option<(Mask, usize)> 
         if i64::from(next) > r {
             continue;
         }
-        // Side neighbours: the centres are a grid step apart, the reach a
-        // grid step longer than the radius, so the diagonals are covered.
+        // All eight neighbours: steps through the mask then measure the
+        // largest of the two offsets, as the nine-pixel test does, and a
+        // wide part's corners are reached (side steps alone leave them: a
+        // speck at each corner of a phone, far outliers that inflate EM's
+        // first variance).
+        let (left, right, up, down) = (u > 0, u + 1 < wu, v > 0, v + 1 < hu);
         let sides = [
-            (u > 0).then(|| (i - 1, u - 1, v)),
-            (u + 1 < wu).then(|| (i + 1, u + 1, v)),
-            (v > 0).then(|| (i - wu, u, v - 1)),
-            (v + 1 < hu).then(|| (i + wu, u, v + 1)),
+            left.then(|| (i - 1, u.wrapping_sub(1), v)),
+            right.then(|| (i + 1, u + 1, v)),
+            up.then(|| (i - wu, u, v.wrapping_sub(1))),
+            down.then(|| (i + wu, u, v + 1)),
+            (left && up).then(|| (i - wu - 1, u.wrapping_sub(1), v.wrapping_sub(1))),
+            (right && up).then(|| (i - wu + 1, u + 1, v.wrapping_sub(1))),
+            (left && down).then(|| (i + wu - 1, u.wrapping_sub(1), v + 1)),
+            (right && down).then(|| (i + wu + 1, u + 1, v + 1)),
         ];
         for (j, ju, jv) in sides.into_iter().flatten() {
             if kept.data[j] {
@@ -793,6 +801,13 @@ mod tests {
         let (kept, gone) = without_wide_parts(&mask, 10.0).expect("the block is wide");
         assert_eq!(kept.count() + gone, before);
         assert!(!kept.get(90, 40), "the block's middle stays");
+        // Nothing of the block stays, its corners included (side steps alone
+        // left a speck at each: far outliers for the tracker).
+        for v in 25..55 {
+            for u in 70..110 {
+                assert!(!kept.get(u, v), "({u}, {v}) of the block stays");
+            }
+        }
         assert!(kept.get(42, 22), "the crossing went");
         assert!(kept.get(20, 22) && kept.get(42, 70), "the lines went");
         // The block: 1200 px; what goes is the block and the line's pixels
