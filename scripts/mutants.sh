@@ -14,7 +14,8 @@ files=(
   core/src/upe/registration.rs
   core/src/upe/occlusion.rs
   core/src/upe/resampling.rs
-  core/src/upe/visibility.rs
+  core/src/polyline.rs
+  core/src/visibility.rs
   core/src/upe/mod.rs
   core/src/upe/slide.rs
   core/src/upe/length.rs
@@ -22,6 +23,11 @@ files=(
   core/src/perception/evidence.rs
   core/src/metrics.rs
   core/src/perception/segmentation.rs
+  core/src/perception/initialisation/skeleton.rs
+  core/src/perception/initialisation/graph.rs
+  core/src/perception/initialisation/candidates.rs
+  core/src/perception/initialisation/lift.rs
+  core/src/perception/initialisation/mod.rs
   core/src/params.rs
   core/src/validation.rs
 )
