@@ -9,6 +9,7 @@
 
 extern crate alloc;
 
+mod layout;
 pub mod render;
 pub mod rope;
 pub mod scenario;

@@ -10,6 +10,7 @@ use upetrack::perception::segmentation::rgb_to_hsv;
 use upetrack::rng::SplitMix64;
 use upetrack::{CameraIntrinsics, HsvRange, Rect};
 
+use crate::layout::{arc_shape, bends_shape, lift_upper_strand, loop_shape, lying, s_shape};
 use crate::render::{hidden_by_boxes, render, OccluderBox, RenderSettings};
 use crate::rope::{Rope, RopeSettings};
 use crate::variant::Variant;
@@ -277,68 +278,6 @@ pub struct Scenario {
     boxes: Vec<MovingBox>,
 }
 
-/// An S laid on the table: one period of a sine across the view.
-fn s_shape() -> Vec<Vec3> {
-    (0..400)
-        .map(|i| {
-            let t = i as f64 / 399.0;
-            Vec3::new(
-                -0.17 + 0.34 * t,
-                0.11 * libm::sin(core::f64::consts::TAU * t),
-                0.0,
-            )
-        })
-        .collect()
-}
-
-/// A gentle arc, for the tip and pull scenarios.
-fn arc_shape() -> Vec<Vec3> {
-    (0..400)
-        .map(|i| {
-            let t = i as f64 / 399.0;
-            Vec3::new(
-                -0.25 + 0.5 * t,
-                -0.12 + 0.25 * libm::sin(core::f64::consts::PI * t),
-                0.0,
-            )
-        })
-        .collect()
-}
-
-/// A cable laid in several bends: two periods of a sine, about 1 m long.
-fn bends_shape() -> Vec<Vec3> {
-    (0..400)
-        .map(|i| {
-            let t = i as f64 / 399.0;
-            Vec3::new(
-                -0.16 + 0.36 * t,
-                0.115 * libm::sin(core::f64::consts::TAU * 2.0 * t),
-                0.0,
-            )
-        })
-        .collect()
-}
-
-/// A loop crossing itself: the nodal cubic `y^2 = x^2 (x + 1)` (crossing at
-/// the origin at right angles), tails to +x.
-fn loop_shape() -> Vec<Vec3> {
-    (0..400)
-        .map(|i| {
-            let t = -1.35 + 2.7 * i as f64 / 399.0;
-            Vec3::new(0.1 - 0.15 * (t * t - 1.0), 0.15 * t * (t * t - 1.0), 0.0)
-        })
-        .collect()
-}
-
-/// A flat object lying on the table, corners `(x0, y0)` and `(x1, y1)`, `h` high.
-fn lying(x0: f64, y0: f64, x1: f64, y1: f64, h: f64, color: [f64; 3]) -> OccluderBox {
-    OccluderBox {
-        min: Vec3::new(x0, y0, 0.0),
-        max: Vec3::new(x1, y1, h),
-        color: Some(color),
-    }
-}
-
 fn smoothstep(x: f64) -> f64 {
     let x = x.clamp(0.0, 1.0);
     x * x * (3.0 - 2.0 * x)
@@ -355,34 +294,6 @@ fn still(shape: OccluderBox, frames: usize) -> MovingBox {
             bob: 0.0,
             dwell: false,
         },
-    }
-}
-
-/// Lays the loop's second crossing strand over the first: the particles
-/// of the later strand within a few thicknesses of the crossing are raised
-/// by a thickness (with a smooth bump), so that settling leaves them
-/// resting on the strand underneath instead of pushing it aside.
-fn lift_upper_strand(rope: &mut Rope) {
-    let n = rope.x.len();
-    let t = rope.settings.thickness;
-    // The crossing: the closest pair of particles far apart along the rope.
-    let mut best = (f64::MAX, 0, 0);
-    for i in 0..n {
-        for j in i + n / 4..n {
-            let d = upetrack::math::norm(&(rope.x[j] - rope.x[i]));
-            if d < best.0 {
-                best = (d, i, j);
-            }
-        }
-    }
-    let (_, _, upper) = best;
-    let spacing = rope.settings.length / (n - 1) as f64;
-    let reach = 4.0 * t;
-    for (k, p) in rope.x.iter_mut().enumerate() {
-        let s = (k as f64 - upper as f64) * spacing / reach;
-        if s.abs() < 1.0 {
-            p.z += t * (0.5 + 0.5 * libm::cos(core::f64::consts::PI * s));
-        }
     }
 }
 

@@ -8,8 +8,8 @@ use alloc::vec::Vec;
 
 use super::graph::{angle, hermite, SkeletonGraph};
 use super::lift::{depths_along, line_through, resolve_crossings, NO_ZONE};
+use super::report::{NotRope, SetAside};
 use super::skeleton::{Grid, Shape};
-use super::{NotRope, SetAside};
 use crate::math::{Vec2, Vec3};
 use crate::perception::camera::CameraIntrinsics;
 use crate::perception::frame::Frame;
@@ -20,15 +20,15 @@ use crate::polyline::polyline_length;
 /// A point whose width exceeds this multiple of its walk's lower-quartile
 /// width (plus [`WIDTH_SLACK_PX`]) belongs to something thicker the rope
 /// touches (a phone, a hand): the walk is cut there.
-const THICK_RATIO: f64 = 2.0;
+pub const THICK_RATIO: f64 = 2.0;
 /// Pixels of width a thin line's mask may gain or lose at its edges.
-const WIDTH_SLACK_PX: f64 = 1.5;
+pub const WIDTH_SLACK_PX: f64 = 1.5;
 /// A rope's width is even: this share of its points lie within
 /// [`EVEN_TOLERANCE`] of its median width (plus [`WIDTH_SLACK_PX`]).
 pub const MIN_EVEN_SHARE: f64 = 0.75;
 /// Relative tolerance of the even-width test (perspective across a tilted
 /// view changes a rope's width by up to a third).
-const EVEN_TOLERANCE: f64 = 0.5;
+pub const EVEN_TOLERANCE: f64 = 0.5;
 /// Shortest piece of rope worth joining, in its own widths (a stretch of
 /// rope between two patches of glare).
 pub const MIN_FRAGMENT_ELONGATION: f64 = 3.0;
