@@ -779,6 +779,48 @@ mod tests {
         );
     }
 
+    /// Two loops in a row, each crossing the rope once: the path goes round
+    /// both and through each crossing straight on.
+    #[test]
+    fn a_rope_with_two_crossings_is_followed_round_both_loops() {
+        let mut mask = Mask::new(640, 480);
+        let rope: Vec<Vec2> = (0..=800)
+            .map(|i| {
+                // Two nodal cubics side by side, joined by their tails.
+                let s = i as f64 / 800.0;
+                let (t, dx) = if s < 0.5 {
+                    (-1.3 + 2.6 * (s / 0.5), 0.0)
+                } else {
+                    (-1.3 + 2.6 * ((s - 0.5) / 0.5), 0.0)
+                };
+                let x = -70.0 * (t * t - 1.0);
+                let y = 70.0 * t * (t * t - 1.0);
+                if s < 0.5 {
+                    Vec2::new(200.0 + y + dx, 240.0 + x)
+                } else {
+                    Vec2::new(440.0 + y, 240.0 - x)
+                }
+            })
+            .collect();
+        draw(&mut mask, &rope, 6.0);
+        let line = find_centre_line(&mask, 150).expect("centre line");
+        // Both loops: the path is as long as the drawn rope (less its caps)
+        // and passes the far side of each loop.
+        let drawn = px_length(&rope);
+        let found = px_length(&line);
+        assert!(found > 0.9 * drawn, "{found:.0} px of {drawn:.0}");
+        for far in [
+            Vec2::new(200.0, 240.0 + 70.0),
+            Vec2::new(440.0, 240.0 - 70.0),
+        ] {
+            let d = line
+                .iter()
+                .map(|p| (p - far).norm())
+                .fold(f64::MAX, f64::min);
+            assert!(d < 9.0, "the loop through {far:?} was left out ({d:.0} px)");
+        }
+    }
+
     #[test]
     fn nothing_rope_shaped_is_a_clear_error() {
         let mut scene = Scene::new();
