@@ -103,79 +103,65 @@ fn a_rope_in_three_pieces_of_mask_is_one_rope() {
     });
 }
 
-#[test]
-fn a_scene_with_nothing_rope_shaped_is_refused_by_the_command() {
-    let dir = common::temp_dir("finding", "nothing");
-    let out = run(&[
-        "synth",
-        "cable-desk",
-        dir.to_str().expect("utf-8"),
-        "--frames",
-        "2",
-    ]);
+/// `upetrack synth cable-desk` (with `synth_args`) into a fresh folder,
+/// `edit` applied to its `dlo.json`, then `upetrack track` on it: the
+/// track's exit, its stderr and the result JSON (null when not written).
+fn synth_edit_track(
+    name: &str,
+    synth_args: &[&str],
+    edit: impl FnOnce(&mut serde_json::Value),
+) -> (bool, String, serde_json::Value) {
+    let dir = common::temp_dir("finding", name);
+    let d = dir.to_str().expect("utf-8");
+    let out = run(&[&["synth", "cable-desk", d][..], synth_args].concat());
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    // Black rectangles over the cable, the USB stick and the pen: every
-    // shape in the black range is compact.
     let dlo_path = dir.join("dlo.json");
     let mut dlo: serde_json::Value =
         serde_json::from_slice(&std::fs::read(&dlo_path).expect("dlo.json")).expect("json");
-    dlo["occlusions"] = serde_json::json!([
-        { "frames": [0, 1], "rect": [120, 60, 520, 400] },
-        { "frames": [0, 1], "rect": [30, 300, 70, 180] }
-    ]);
+    edit(&mut dlo);
     std::fs::write(&dlo_path, dlo.to_string()).expect("write dlo.json");
     let result = dir.join("result.json");
-    let out = run(&[
-        "track",
-        dir.to_str().expect("utf-8"),
-        "--out",
-        result.to_str().expect("utf-8"),
-    ]);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success(), "tracked: {stderr}");
+    let out = run(&["track", d, "--out", result.to_str().expect("utf-8")]);
+    let r = std::fs::read(&result)
+        .ok()
+        .and_then(|b| serde_json::from_slice(&b).ok())
+        .unwrap_or(serde_json::Value::Null);
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+        r,
+    )
+}
+
+#[test]
+fn a_scene_with_nothing_rope_shaped_is_refused_by_the_command() {
+    // Black rectangles over the cable, the USB stick and the pen: every
+    // shape in the black range is compact.
+    let (ok, stderr, r) = synth_edit_track("nothing", &["--frames", "2"], |dlo| {
+        dlo["occlusions"] = serde_json::json!([
+            { "frames": [0, 1], "rect": [120, 60, 520, 400] },
+            { "frames": [0, 1], "rect": [30, 300, 70, 180] }
+        ]);
+    });
+    assert!(!ok, "tracked: {stderr}");
     assert!(stderr.contains("nothing rope-shaped"), "{stderr}");
     // No data lost: every frame is in the result, lost with its reason.
-    let r: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(&result).expect("result written")).expect("json");
-    let frames = r["frames"].as_array().expect("frames");
+    let frames = r["frames"].as_array().expect("the result is written");
     assert_eq!(frames.len(), 2);
     assert!(frames.iter().all(|f| f["lost"] == true));
 }
 
 #[test]
 fn the_command_says_which_rope_it_took_and_why() {
-    let dir = common::temp_dir("finding", "said");
-    let out = run(&[
-        "synth",
-        "cable-desk",
-        dir.to_str().expect("utf-8"),
-        "--frames",
-        "3",
-        "--rope-prior",
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let result = dir.join("result.json");
-    let out = run(&[
-        "track",
-        dir.to_str().expect("utf-8"),
-        "--out",
-        result.to_str().expect("utf-8"),
-    ]);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{stderr}");
+    let (ok, stderr, r) = synth_edit_track("said", &["--frames", "3", "--rope-prior"], |_| {});
+    assert!(ok, "{stderr}");
     assert!(stderr.contains("frame 0: rope found: 1.0"), "{stderr}");
     assert!(stderr.contains("of the rope's known length"), "{stderr}");
     assert!(stderr.contains("set aside"), "{stderr}");
-    let r: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(&result).expect("result")).expect("json");
     let init = &r["frames"][0]["init"];
     assert!(
         init["candidates"].as_array().is_some_and(|c| !c.is_empty()),
