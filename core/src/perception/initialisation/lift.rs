@@ -190,6 +190,49 @@ mod tests {
         assert!(fill_gaps(&mut [None, None]).is_none());
     }
 
+    /// Depth rising 1 mm a pixel across the image and 3 mm a row: the
+    /// median of the 7 x 7 window of rope pixels around a point is the
+    /// depth at the point (the window is centred on it); off the mask or
+    /// without depth, nothing.
+    #[test]
+    fn the_depth_at_a_point_is_the_median_of_its_window_of_rope_pixels() {
+        let (w, h) = (40u32, 30u32);
+        let depth: Vec<u16> = (0..w * h)
+            .map(|i| (500 + (i % w) + 3 * (i / w)) as u16)
+            .collect();
+        let rgb = vec![0u8; (w * h * 3) as usize];
+        let frame = Frame::new(w, h, &rgb, &depth, 0.001).expect("frame");
+        let mut mask = Mask::new(w, h);
+        mask.data.fill(true);
+        let settings = crate::params::Params::default().cloud();
+        let at = |u: f64, v: f64| depths_along(&[Vec2::new(u, v)], &frame, &mask, &settings)[0];
+        for (u, v) in [(10.0, 10.0), (20.0, 12.0), (33.0, 20.0), (5.0, 22.0)] {
+            let expected = (500.0 + u + 3.0 * v) / 1000.0;
+            let got = at(u, v).expect("depth");
+            assert!(
+                (got - expected).abs() < 1e-9,
+                "({u}, {v}): {got} not {expected}"
+            );
+        }
+        // Only rope pixels count: with the mask's left half only, the window
+        // at the edge takes its left columns, whose depths are smaller.
+        let mut left = Mask::new(w, h);
+        for (i, m) in left.data.iter_mut().enumerate() {
+            *m = (i as u32 % w) < 20;
+        }
+        let edge = depths_along(&[Vec2::new(20.0, 10.0)], &frame, &left, &settings)[0];
+        assert!(edge.expect("depth") < (500.0 + 20.0 + 30.0) / 1000.0);
+        assert_eq!(
+            depths_along(
+                &[Vec2::new(30.0, 10.0)],
+                &frame,
+                &Mask::new(w, h),
+                &settings
+            ),
+            [None]
+        );
+    }
+
     /// A loop crossing itself: the path passes zone 7 twice. The first pass
     /// lies at 0.60 m on both sides, the second at 0.585 m (the strand on
     /// top); 0.585 m is measured in the zone both times. The first pass's
