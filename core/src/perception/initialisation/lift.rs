@@ -246,9 +246,40 @@ mod tests {
         resolve_crossings(&mut depths, &zones);
         assert_eq!(depths[2..4], [None, None]);
         assert_eq!(depths[7..9], [hi, hi]);
-        // A zone passed once keeps what it measured.
+        // A zone passed once keeps what it measured, even with no depth
+        // before it.
         let mut once = vec![lo, hi, lo];
         resolve_crossings(&mut once, &[z, 3, z]);
         assert_eq!(once, [lo, hi, lo]);
+        let mut first = vec![hi, hi, lo];
+        resolve_crossings(&mut first, &[3, 3, z]);
+        assert_eq!(first, [hi, hi, lo]);
+    }
+
+    /// The pass kept is the one whose measured depth is nearest the mean of
+    /// its sides, whether the other's sides are nearer or farther.
+    #[test]
+    fn the_pass_kept_is_the_one_its_sides_predict() {
+        let z = NO_ZONE;
+        let zones = [z, 5, z, z, 5, z];
+        for other_sides in [0.580, 0.620] {
+            let (fit, other) = (Some(0.600), Some(other_sides));
+            // The first pass fits its sides exactly; the second does not.
+            let mut d = vec![fit, fit, fit, other, fit, other];
+            resolve_crossings(&mut d, &zones);
+            assert_eq!(
+                d,
+                [fit, fit, fit, other, None, other],
+                "sides {other_sides}"
+            );
+            // The same two passes the other way round.
+            let mut d = vec![other, fit, other, fit, fit, fit];
+            resolve_crossings(&mut d, &zones);
+            assert_eq!(
+                d,
+                [other, None, other, fit, fit, fit],
+                "sides {other_sides}"
+            );
+        }
     }
 }
