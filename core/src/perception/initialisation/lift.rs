@@ -222,6 +222,13 @@ mod tests {
         }
         let edge = depths_along(&[Vec2::new(20.0, 10.0)], &frame, &left, &settings)[0];
         assert!(edge.expect("depth") < (500.0 + 20.0 + 30.0) / 1000.0);
+        // And rows: with the top rows only, the window takes the rows above.
+        let mut top = Mask::new(w, h);
+        for (i, m) in top.data.iter_mut().enumerate() {
+            *m = (i as u32 / w) < 10;
+        }
+        let edge = depths_along(&[Vec2::new(20.0, 10.0)], &frame, &top, &settings)[0];
+        assert!(edge.expect("depth") < (500.0 + 20.0 + 30.0) / 1000.0);
         assert_eq!(
             depths_along(
                 &[Vec2::new(30.0, 10.0)],
