@@ -52,8 +52,11 @@ pub struct EmReport {
 }
 
 /// Starting `sigma^2`: the mean squared distance from each point to its
-/// nearest participating node, per dimension, kept between the floor and the
-/// square of the mean node spacing (a larger start would let unregularised
+/// nearest participating node, per dimension, over the points within a
+/// node spacing of one (a point farther is not the rope near any node: a
+/// thin distractor beside the rope, whose few points would otherwise raise
+/// the start to its cap and let the end nodes follow it), kept between the
+/// floor and the square of the mean node spacing (a larger start would let unregularised
 /// nodes collapse onto the cloud's centroid).
 pub fn initial_variance(cloud: &[Vec3], nodes: &[Vec3], active: &[bool], min_variance: f64) -> f64 {
     let active_nodes: Vec<Vec3> = nodes
@@ -62,6 +65,12 @@ pub fn initial_variance(cloud: &[Vec3], nodes: &[Vec3], active: &[bool], min_var
         .filter(|(_, &a)| a)
         .map(|(y, _)| *y)
         .collect();
+    let cap = if nodes.len() > 1 {
+        let spacing = polyline_length(nodes) / (nodes.len() - 1) as f64;
+        (spacing * spacing).max(min_variance)
+    } else {
+        f64::INFINITY
+    };
     let mut sum = 0.0;
     let mut n = 0usize;
     for x in cloud {
@@ -69,17 +78,11 @@ pub fn initial_variance(cloud: &[Vec3], nodes: &[Vec3], active: &[bool], min_var
         for y in &active_nodes {
             d2 = d2.min((x - y).norm_squared());
         }
-        if d2.is_finite() {
+        if d2 <= cap {
             sum += d2;
             n += 1;
         }
     }
-    let cap = if nodes.len() > 1 {
-        let spacing = polyline_length(nodes) / (nodes.len() - 1) as f64;
-        (spacing * spacing).max(min_variance)
-    } else {
-        f64::INFINITY
-    };
     if n == 0 {
         return cap;
     }
@@ -495,6 +498,31 @@ mod tests {
             }
         }
         (s.max_iterations, var)
+    }
+
+    /// Points every mm along a line of nodes 1 cm apart, 1 mm off it, and a few 7 cm
+    /// away (a sliver of something else in the colour range): the start is
+    /// the near points' mean square per dimension, not pulled to the cap.
+    #[test]
+    fn far_points_do_not_raise_the_first_variance() {
+        let nodes: Vec<Vec3> = (0..10)
+            .map(|k| Vec3::new(0.01 * k as f64, 0.0, 0.6))
+            .collect();
+        let active = vec![true; nodes.len()];
+        let mut cloud: Vec<Vec3> = (0..90)
+            .map(|k| Vec3::new(0.001 * k as f64, 0.001, 0.6))
+            .collect();
+        // Squared distances 0, 1, 4, 9, 16, 25, 16, 9, 4, 1 mm^2 along the
+        // line (8.5 on average), plus 1 across: 9.5 mm^2 over 3 dimensions.
+        let near = initial_variance(&cloud, &nodes, &active, 1e-8);
+        assert!((near - 9.5e-6 / 3.0).abs() < 1e-12, "{near}");
+        cloud.extend((0..5).map(|k| Vec3::new(0.005 * k as f64, 0.07, 0.6)));
+        let with_far = initial_variance(&cloud, &nodes, &active, 1e-8);
+        assert_eq!(with_far, near);
+        // Only far points: the cap, the node spacing squared.
+        let far: Vec<Vec3> = cloud[90..].to_vec();
+        let cap = initial_variance(&far, &nodes, &active, 1e-8);
+        assert!((cap - 1e-4).abs() < 1e-12, "{cap}");
     }
 
     #[test]
