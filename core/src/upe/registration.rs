@@ -438,19 +438,26 @@ mod tests {
         s: &EmSettings,
     ) -> (u32, f64) {
         let idx: Vec<usize> = (0..nodes.len()).filter(|&m| active[m]).collect();
-        // Start: mean squared nearest-node distance per dimension, between
-        // the floor and the squared mean node spacing.
-        let sum: f64 = cloud
+        // Start: mean squared nearest-node distance per dimension over the
+        // points within a node spacing, between the floor and the squared
+        // mean node spacing.
+        let len: f64 = nodes.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
+        let spacing = len / (nodes.len() - 1) as f64;
+        let near: Vec<f64> = cloud
             .iter()
             .map(|x| {
                 idx.iter()
                     .map(|&m| (x - nodes[m]).norm_squared())
                     .fold(f64::INFINITY, f64::min)
             })
-            .sum();
-        let len: f64 = nodes.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
-        let spacing = len / (nodes.len() - 1) as f64;
-        let mut var = (sum / (cloud.len() as f64 * 3.0)).clamp(s.min_variance, spacing * spacing);
+            .filter(|d2| *d2 <= spacing * spacing)
+            .collect();
+        let start = near.iter().sum::<f64>() / (near.len() as f64 * 3.0);
+        let mut var = if near.is_empty() {
+            spacing * spacing
+        } else {
+            start.clamp(s.min_variance, spacing * spacing)
+        };
         let (k, n, w) = (idx.len() as f64, cloud.len() as f64, s.outlier_weight);
         for it in 1..=s.max_iterations {
             let mu = libm::pow(2.0 * core::f64::consts::PI * var, 1.5) * w * k / ((1.0 - w) * n);
