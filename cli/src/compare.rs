@@ -171,17 +171,29 @@ const FINGERPRINT_FILE: &str = "synth-fingerprint.txt";
 /// simulator is already there.
 fn ensure_sequence(data: &Path, case: &Case) -> Result<PathBuf, CliError> {
     let dir = case_dir(data, case);
-    let print = fingerprint(case);
+    ensure_written(&dir, &fingerprint(case), |partial| {
+        write_scenario(scenario(case), partial).map(drop)
+    })?;
+    Ok(dir)
+}
+
+/// Runs `write` into a fresh `<dir>.partial` and renames it to `dir`,
+/// unless `dir` is complete and its fingerprint file says `print`.
+pub(crate) fn ensure_written(
+    dir: &Path,
+    print: &str,
+    write: impl FnOnce(&Path) -> Result<(), CliError>,
+) -> Result<(), CliError> {
     let cached = std::fs::read_to_string(dir.join(FINGERPRINT_FILE)).ok();
-    if dir.join("groundtruth.json").is_file() && cached.as_deref() == Some(print.as_str()) {
-        return Ok(dir);
+    if dir.join("groundtruth.json").is_file() && cached.as_deref() == Some(print) {
+        return Ok(());
     }
     if dir.exists() {
         eprintln!(
             "{} was written by another simulator: writing it again",
             dir.display()
         );
-        std::fs::remove_dir_all(&dir).map_err(|e| CliError(format!("{}: {e}", dir.display())))?;
+        std::fs::remove_dir_all(dir).map_err(|e| CliError(format!("{}: {e}", dir.display())))?;
     }
     eprintln!("writing {} ...", dir.display());
     let partial = dir.with_extension("partial");
@@ -189,11 +201,11 @@ fn ensure_sequence(data: &Path, case: &Case) -> Result<PathBuf, CliError> {
         std::fs::remove_dir_all(&partial)
             .map_err(|e| CliError(format!("{}: {e}", partial.display())))?;
     }
-    write_scenario(scenario(case), &partial)?;
+    write(&partial)?;
     std::fs::write(partial.join(FINGERPRINT_FILE), print)
         .map_err(|e| CliError(format!("{}: {e}", partial.display())))?;
-    std::fs::rename(&partial, &dir).map_err(|e| CliError(format!("{}: {e}", dir.display())))?;
-    Ok(dir)
+    std::fs::rename(&partial, dir).map_err(|e| CliError(format!("{}: {e}", dir.display())))?;
+    Ok(())
 }
 
 /// One row of the protocol table.
@@ -289,6 +301,8 @@ pub fn cmd_compare(raw: &[String]) -> Result<(), CliError> {
             "algorithm",
             "only",
             "figures",
+            "random",
+            "count",
         ],
     )?;
     let figures = args.value("figures").map(PathBuf::from);
@@ -302,6 +316,22 @@ pub fn cmd_compare(raw: &[String]) -> Result<(), CliError> {
         None => Algorithm::ALL.to_vec(),
         Some(_) => crate::algorithms(&args, &params)?,
     };
+    if let Some(range) = args.value("random") {
+        let count = args.number::<u64>("count", u64::MAX)?;
+        return crate::random_bench::run(
+            range,
+            count,
+            frames,
+            &data,
+            params,
+            &algorithms,
+            [
+                args.value("json"),
+                args.value("markdown"),
+                args.value("update"),
+            ],
+        );
+    }
     // `--only a,b`: just the cases of these names (quick studies).
     let only: Option<Vec<String>> = args
         .value("only")
@@ -391,21 +421,31 @@ const FIGURE_SCENES: [&str; 2] = ["static-s", "dynamic-pull"];
 
 /// Replaces what lies between the markers of `page` with `text`.
 fn update_page(page: &Path, text: &str) -> Result<(), CliError> {
+    update_between(page, text, BEGIN_MARKER, END_MARKER)
+}
+
+/// Replaces what lies between the lines `begin` and `end` of `page` with `text`.
+pub(crate) fn update_between(
+    page: &Path,
+    text: &str,
+    begin: &str,
+    end: &str,
+) -> Result<(), CliError> {
     let old =
         std::fs::read_to_string(page).map_err(|e| CliError(format!("{}: {e}", page.display())))?;
-    let (Some(a), Some(b)) = (old.find(BEGIN_MARKER), old.find(END_MARKER)) else {
+    let (Some(a), Some(b)) = (old.find(begin), old.find(end)) else {
         return Err(CliError(format!(
-            "{}: needs the lines {BEGIN_MARKER} and {END_MARKER}",
+            "{}: needs the lines {begin} and {end}",
             page.display()
         )));
     };
     if b < a {
         return Err(CliError(format!(
-            "{}: {END_MARKER} comes before {BEGIN_MARKER}",
+            "{}: {end} comes before {begin}",
             page.display()
         )));
     }
-    let new = format!("{}{BEGIN_MARKER}\n{text}\n{}", &old[..a], &old[b..]);
+    let new = format!("{}{begin}\n{text}\n{}", &old[..a], &old[b..]);
     upetrack_io::write::write_file(page, new.as_bytes())?;
     Ok(())
 }

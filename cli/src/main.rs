@@ -5,6 +5,7 @@ mod bench;
 mod compare;
 mod figure;
 mod overlay;
+mod random_bench;
 mod recording;
 mod synth;
 
@@ -25,8 +26,10 @@ USAGE:
   upetrack eval <sequence>... [--algorithm A,B,..] [--params <params.json>] [--json <out.json>] [--markdown <out.md>] [--per-frame <out.csv>]
   upetrack score <sequence> <result.json>... [--json <out.json>] [--markdown <out.md>]
   upetrack compare [--data <dir>] [--frames N] [--json <out.json>] [--markdown <out.md>] [--update <page.md>] [--figures <dir>]
+  upetrack compare --random tune|report [--count N] [--frames N] [--data <dir>] [--json ..] [--markdown ..] [--update <page.md>]
   upetrack synth <scenario> <dir> [--frames N] [--seed S] [--hd] [--variant V] [--rope-prior]
                  [--depth-noise X] [--jpeg-quality Q] [--y4m <video.y4m>]
+  upetrack synth random <dir> [--seed S] [--count N] [--frames N] [--rope-prior]
   upetrack bench [<sequence>...] [--frames N] [--repeat R] [--algorithm A,B,..]
   upetrack overlay <sequence> <result.json> <frame> <out.png> [--depth]
   upetrack info <recording> [--json] [--color-topic T] [--depth-topic T]
@@ -41,7 +44,11 @@ and --color-topic / --depth-topic when the streams are not found by name;
 Algorithms: upetrack (default), cpd, trackdlo, cdcpd2; --algorithm overrides the parameter file's.
 Scenarios (`upetrack scenarios` describes them): static-s, dynamic-pull, tip-drag, sweep-10..sweep-70,
 lifted-swing, fast-pull, gripper-swing, box-over-end, box-over-middle, cable-desk, crossing-loop, in-pieces;
-synth --rope-prior writes the rope's length and diameter into dlo.json.";
+synth --rope-prior writes the rope's length and diameter into dlo.json.
+synth random draws a whole scene from the seed (docs/synthetic.md lists the distributions) and writes
+what it drew in scene.json; --count N writes seeds S..S+N-1 into folders random-<seed>-<frames>f.
+compare --random runs every algorithm on the drawn scenes of a seed range: tune (1000..1099) to choose
+rules on, report (2000..2099) to judge them; --count N takes the range's first N seeds.";
 
 /// A command-line error with its message.
 struct CliError(String);

@@ -5,6 +5,7 @@ use std::time::Instant;
 
 use upetrack_io::synthetic::SyntheticWriter;
 use upetrack_io::write::{write_file, y4m_frame, y4m_header, JPEG_QUALITY};
+use upetrack_synth::random::DEFAULT_RANDOM_FRAMES;
 use upetrack_synth::variant::D435I_1280X720;
 use upetrack_synth::{Scenario, ScenarioKind, Variant};
 
@@ -68,6 +69,7 @@ pub fn cmd_synth(raw: &[String]) -> Result<(), CliError> {
         raw,
         &["hd", "rope-prior"],
         &[
+            "count",
             "frames",
             "seed",
             "variant",
@@ -81,6 +83,9 @@ pub fn cmd_synth(raw: &[String]) -> Result<(), CliError> {
             "synth takes a scenario and a folder\n\n{USAGE}"
         )));
     };
+    if name == "random" {
+        return synth_random(&args, Path::new(dir));
+    }
     let kind = ScenarioKind::parse(name).ok_or_else(|| {
         CliError(format!(
             "unknown scenario `{name}`; `upetrack scenarios` lists them"
@@ -134,4 +139,102 @@ pub fn cmd_synth(raw: &[String]) -> Result<(), CliError> {
         start.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+/// Most scenes one `synth random --count` writes.
+pub const MAX_RANDOM_COUNT: u64 = 10_000;
+
+/// The folder of drawn scene `seed` inside `dir`.
+pub fn random_dir(dir: &Path, seed: u64, frames: usize) -> std::path::PathBuf {
+    dir.join(format!("random-{seed}-{frames}f"))
+}
+
+/// `upetrack synth random <dir> [--seed S] [--count N] [--frames N] [--rope-prior]`:
+/// one drawn scene into `dir`, or with `--count` scenes `S..S+N` into
+/// folders `random-<seed>-<frames>f` inside it, two at a time.
+fn synth_random(args: &Args, dir: &Path) -> Result<(), CliError> {
+    let frames: usize = args.number("frames", DEFAULT_RANDOM_FRAMES)?;
+    if frames == 0 || frames > upetrack_synth::scenario::MAX_FRAMES {
+        return Err(CliError(format!(
+            "--frames must be in 1..={}",
+            upetrack_synth::scenario::MAX_FRAMES
+        )));
+    }
+    for refused in ["hd", "variant", "depth-noise", "y4m"] {
+        if args.flag(refused) || args.value(refused).is_some() {
+            return Err(CliError(format!(
+                "--{refused} does not apply to `synth random`: the camera, rope and noise are drawn from the seed"
+            )));
+        }
+    }
+    let seed: u64 = args.number("seed", 1)?;
+    let start = Instant::now();
+    let prior = args.flag("rope-prior");
+    let Some(count) = args
+        .value("count")
+        .map(|_| args.number::<u64>("count", 1))
+        .transpose()?
+    else {
+        write_random(seed, frames, prior, dir)?;
+        eprintln!(
+            "{}: {frames} frames of random-{seed} written in {:.1} s",
+            dir.display(),
+            start.elapsed().as_secs_f64()
+        );
+        return Ok(());
+    };
+    if !(1..=MAX_RANDOM_COUNT).contains(&count) {
+        return Err(CliError(format!(
+            "--count must be in 1..={MAX_RANDOM_COUNT}"
+        )));
+    }
+    let seeds: Vec<u64> = (seed..seed.saturating_add(count)).collect();
+    for_each_parallel(&seeds, |&s| {
+        write_random(s, frames, prior, &random_dir(dir, s, frames)).map(drop)
+    })?;
+    eprintln!(
+        "{}: {count} drawn scenes of {frames} frames (seeds {seed}..{}) written in {:.1} s",
+        dir.display(),
+        seed + count - 1,
+        start.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+/// Writes drawn scene `seed` into `dir` (its `scene.json` beside the contract's files).
+pub fn write_random(seed: u64, frames: usize, prior: bool, dir: &Path) -> Result<usize, CliError> {
+    let writer = SyntheticWriter::new(Scenario::random(seed, frames)).with_rope_prior(prior);
+    write_scenario_and_video(writer, dir, None)
+}
+
+/// Runs `work` on every item, one item per thread at a time on as many
+/// threads as the machine has cores; stops at the first error and returns it.
+pub fn for_each_parallel<T: Sync>(
+    items: &[T],
+    work: impl Fn(&T) -> Result<(), CliError> + Sync,
+) -> Result<(), CliError> {
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(items.len())
+        .max(1);
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let first_error = std::sync::Mutex::new(None);
+    std::thread::scope(|scope| {
+        for _ in 0..threads {
+            scope.spawn(|| loop {
+                let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                let Some(item) = items.get(i) else { break };
+                if let Err(e) = work(item) {
+                    if let Ok(mut slot) = first_error.lock() {
+                        slot.get_or_insert(e);
+                    }
+                    break;
+                }
+            });
+        }
+    });
+    match first_error.into_inner() {
+        Ok(Some(e)) => Err(e),
+        _ => Ok(()),
+    }
 }

@@ -17,6 +17,10 @@ pub const SYNTHETIC_FPS: f64 = 30.0;
 /// Depth units of every synthetic sequence, metres.
 pub const SYNTHETIC_DEPTH_SCALE: f64 = 0.001;
 
+/// The file of a drawn scene (`upetrack synth random`) that records
+/// everything drawn for it; readers of the contract ignore it.
+pub const SCENE_FILE: &str = "scene.json";
+
 /// One file of a sequence: its path inside the folder and its bytes.
 pub type SequenceFile = (String, Vec<u8>);
 
@@ -65,7 +69,8 @@ impl SyntheticWriter {
     }
 
     /// `camera_intrinsic.json` and `dlo.json` (colour range, occlusion
-    /// rectangles, depth scale, fps, the ground truth's file name).
+    /// rectangles, depth scale, fps, the ground truth's file name), and for
+    /// a drawn scene [`SCENE_FILE`].
     pub fn header(&self) -> Result<Vec<SequenceFile>, SequenceError> {
         let s = &self.scenario;
         let hsv = s.hsv();
@@ -90,13 +95,17 @@ impl SyntheticWriter {
                 diameter_m: Some(s.rope.settings.thickness),
             }),
         };
-        Ok(vec![
+        let mut files = vec![
             json(
                 "camera_intrinsic.json",
                 &IntrinsicsFile::from_camera(&s.camera()),
             )?,
             json("dlo.json", &dlo)?,
-        ])
+        ];
+        if let Some(draw) = &s.draw {
+            files.push(json(SCENE_FILE, draw)?);
+        }
+        Ok(files)
     }
 
     /// Simulates and renders the next frame: its colour JPEG and depth PNG,

@@ -98,3 +98,21 @@ pub(crate) fn lift_upper_strand(rope: &mut Rope) {
         }
     }
 }
+
+/// A gripper holding a point: its palm over the point, its wrist up from
+/// it and its forearm away to +y (corners relative to the point; `r` the
+/// rope's radius, `color` `None` for the occluders' colour).
+pub(crate) fn gripper(r: f64, color: Option<[f64; 3]>) -> [OccluderBox; 3] {
+    let part = |min: Vec3, max: Vec3| OccluderBox { min, max, color };
+    [
+        part(
+            Vec3::new(-0.035, -0.035, r + 0.005),
+            Vec3::new(0.035, 0.035, r + 0.025),
+        ),
+        part(
+            Vec3::new(-0.02, -0.02, r + 0.025),
+            Vec3::new(0.02, 0.02, 0.20),
+        ),
+        part(Vec3::new(-0.02, -0.02, 0.18), Vec3::new(0.02, 0.28, 0.22)),
+    ]
+}

@@ -10,11 +10,13 @@
 extern crate alloc;
 
 mod layout;
+pub mod random;
 pub mod render;
 pub mod rope;
 pub mod scenario;
 pub mod variant;
 
+pub use random::{RandomScene, SeedRange};
 pub use render::{RenderSettings, Rendered};
 pub use rope::{Rope, RopeSettings};
 pub use scenario::{Scenario, ScenarioKind, SceneKnobs, SynthFrame, SIMULATOR_VERSION};

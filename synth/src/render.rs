@@ -49,6 +49,18 @@ pub struct RenderSettings {
     pub dropout_probability: f64,
     /// Strength of the vignetting at the image corners, in [0, 1]. Default 0.25.
     pub vignetting: f64,
+    /// Translation of the camera's centre from where height and tilt put
+    /// it, world frame, metres (a camera on an arm or in a hand). Default 0.
+    pub camera_shift: [f64; 3],
+    /// Small rotation of the camera about its own x, y and z axes, radians,
+    /// applied after the tilt. Default 0.
+    pub camera_turn: [f64; 3],
+    /// A second albedo for every other strand of the braid (a two-tone
+    /// rope), RGB in [0, 1]; `None` for one colour. Default `None`.
+    pub rope_second_color: Option<[f64; 3]>,
+    /// Contrast of the table's texture about its mean, times the default
+    /// grain's. Default 1.
+    pub table_texture: f64,
 }
 
 impl Default for RenderSettings {
@@ -68,6 +80,10 @@ impl Default for RenderSettings {
             flying_pixel_probability: 0.15,
             dropout_probability: 0.002,
             vignetting: 0.25,
+            camera_shift: [0.0; 3],
+            camera_turn: [0.0; 3],
+            rope_second_color: None,
+            table_texture: 1.0,
         }
     }
 }
@@ -131,14 +147,20 @@ impl CameraPose {
 
 impl RenderSettings {
     /// The camera's pose: `camera_height` from the table's centre along an
-    /// axis tilted by `camera_tilt` from straight down.
+    /// axis tilted by `camera_tilt` from straight down, then turned by
+    /// `camera_turn` and moved by `camera_shift`.
     pub fn pose(&self) -> CameraPose {
         let (s, c) = (libm::sin(self.camera_tilt), libm::cos(self.camera_tilt));
         let x = Vec3::new(1.0, 0.0, 0.0);
         let z = Vec3::new(0.0, s, -c);
+        let mut rows = [x, z.cross(&x), z];
+        if self.camera_turn != [0.0; 3] {
+            rows = turned(rows, self.camera_turn);
+        }
+        let [dx, dy, dz] = self.camera_shift;
         CameraPose {
-            rows: [x, z.cross(&x), z],
-            centre: Vec3::new(0.0, -self.camera_height * s, self.camera_height * c),
+            rows,
+            centre: Vec3::new(dx, dy - self.camera_height * s, dz + self.camera_height * c),
         }
     }
 
@@ -146,6 +168,28 @@ impl RenderSettings {
     pub fn world_to_camera(&self, p: &Vec3) -> Vec3 {
         self.pose().world_to_camera(p)
     }
+}
+
+/// The camera's axes `rows` turned by `angles` about its own x, then y,
+/// then z axis (radians).
+fn turned(rows: [Vec3; 3], angles: [f64; 3]) -> [Vec3; 3] {
+    let [mut x, mut y, mut z] = rows;
+    for (k, a) in angles.into_iter().enumerate() {
+        let (s, c) = (libm::sin(a), libm::cos(a));
+        // Rotating about one axis mixes the other two.
+        let (p, q) = match k {
+            0 => (y, z),
+            1 => (z, x),
+            _ => (x, y),
+        };
+        let (p2, q2) = (p * c + q * s, q * c - p * s);
+        match k {
+            0 => (y, z) = (p2, q2),
+            1 => (z, x) = (p2, q2),
+            _ => (x, y) = (p2, q2),
+        }
+    }
+    [x, y, z]
 }
 
 #[derive(Clone, Copy)]
@@ -414,9 +458,13 @@ pub fn render(
                 Surface::Table => {
                     let world = pose.centre + pose.direction_to_world(&p);
                     let (world_x, world_y) = (world.x, world.y);
-                    let t = 0.94
+                    let mut t = 0.94
                         + 0.06 * value_noise(world_x, world_y, 0.01, tex_seed)
                         + 0.03 * (value_noise(world_x, world_y, 0.002, tex_seed + 1) - 0.5);
+                    if settings.table_texture != 1.0 {
+                        // About the grain's mean, 0.97.
+                        t = 0.97 + (t - 0.97) * settings.table_texture;
+                    }
                     (
                         settings.table_color,
                         light
@@ -436,8 +484,12 @@ pub fn render(
                     let e2 = axis.cross(&e1);
                     let theta = libm::atan2(n.dot(&e2), n.dot(&e1));
                     let phase = core::f64::consts::TAU * s / settings.braid_pitch + 2.0 * theta;
-                    let t = 0.78 + 0.22 * libm::cos(phase);
-                    (settings.rope_color, n.dot(&light).max(0.0), t)
+                    let wave = libm::cos(phase);
+                    let albedo = match settings.rope_second_color {
+                        Some(second) if wave < 0.0 => second,
+                        _ => settings.rope_color,
+                    };
+                    (albedo, n.dot(&light).max(0.0), 0.78 + 0.22 * wave)
                 }
                 Surface::Box { n, albedo } => (albedo, n.dot(&light).abs(), 1.0),
             };

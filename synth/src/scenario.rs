@@ -10,7 +10,10 @@ use upetrack::perception::segmentation::rgb_to_hsv;
 use upetrack::rng::SplitMix64;
 use upetrack::{CameraIntrinsics, HsvRange, Rect};
 
-use crate::layout::{arc_shape, bends_shape, lift_upper_strand, loop_shape, lying, s_shape};
+use crate::layout::{
+    arc_shape, bends_shape, gripper, lift_upper_strand, loop_shape, lying, s_shape,
+};
+use crate::random::{CameraPath, RandomScene};
 use crate::render::{hidden_by_boxes, render, OccluderBox, RenderSettings};
 use crate::rope::{Rope, RopeSettings};
 use crate::variant::Variant;
@@ -169,6 +172,25 @@ impl ScenarioKind {
     }
 }
 
+/// HSV thresholds that fit a rope of albedo `color` (RGB in [0, 1]) in
+/// OpenCV's convention: its hue +-15, saturation from 60 % of its own, any
+/// value above 20; for a black, grey or white rope, the range clicking it
+/// picks ([`HsvRange::around`]).
+pub fn rope_hsv(color: [f64; 3]) -> HsvRange {
+    let rgb = color.map(|x| libm::round(x * 255.0).clamp(0.0, 255.0) as u8);
+    let [h, s, v] = rgb_to_hsv(rgb);
+    if HsvRange::is_achromatic([h, s, v]) {
+        // Black, grey or white: the range a user picks by clicking it.
+        return HsvRange::around(rgb);
+    }
+    let lo = (h as i32 - 15).rem_euclid(180) as u8;
+    let hi = (h as i32 + 15).rem_euclid(180) as u8;
+    HsvRange {
+        lower: [lo, (s as f64 * 0.6) as u8, 20],
+        upper: [hi, 255, 255],
+    }
+}
+
 /// An occlusion rectangle over a frame range (inclusive), as in `dlo.json`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SynthOcclusion {
@@ -198,18 +220,18 @@ pub struct SynthFrame {
 
 /// A grasp moving a particle from its settled position by `offset` between two frames.
 #[derive(Debug, Clone, Copy)]
-struct Pull {
-    particle: usize,
-    start: usize,
-    end: usize,
+pub(crate) struct Pull {
+    pub(crate) particle: usize,
+    pub(crate) start: usize,
+    pub(crate) end: usize,
     /// World-frame displacement, or the swing radius for a circular path.
-    offset: Vec3,
-    circular: bool,
+    pub(crate) offset: Vec3,
+    pub(crate) circular: bool,
 }
 
 /// How an occluder box moves while it is in the scene.
 #[derive(Debug, Clone, Copy)]
-enum BoxPath {
+pub(crate) enum BoxPath {
     /// From its corners at the first frame by `travel` at the last, lifted
     /// by `bob sin(pi x)` on the way; `dwell` slows it over the middle of
     /// its path (position `0.5 + 0.5 (2x - 1)^3` instead of `x`).
@@ -222,17 +244,20 @@ enum BoxPath {
         descent: f64,
         approach: usize,
     },
+    /// Comes in from `from` (an offset from its corners) over the first
+    /// `frames` frames, then stays.
+    Enter { from: Vec3, frames: usize },
 }
 
 /// An occluder box over a frame range (inclusive).
 #[derive(Debug, Clone, Copy)]
-struct MovingBox {
-    first: usize,
-    last: usize,
+pub(crate) struct MovingBox {
+    pub(crate) first: usize,
+    pub(crate) last: usize,
     /// Corners at the start (world frame; relative to the grasp target for
     /// a gripper).
-    shape: OccluderBox,
-    path: BoxPath,
+    pub(crate) shape: OccluderBox,
+    pub(crate) path: BoxPath,
 }
 
 /// Scales applied to a scenario's events, for scenes made to order (the
@@ -257,13 +282,53 @@ impl Default for SceneKnobs {
     }
 }
 
+/// What happens in a scene once the rope has settled.
+pub(crate) struct Events {
+    /// Occlusion rectangles.
+    pub(crate) occlusions: Vec<SynthOcclusion>,
+    /// Grasps moving particles.
+    pub(crate) pulls: Vec<Pull>,
+    /// Occluder boxes.
+    pub(crate) boxes: Vec<MovingBox>,
+    /// How the camera moves, if it does.
+    pub(crate) camera_path: Option<CameraPath>,
+}
+
+/// The rectangle over the projection of `points` (world frame), `margin`
+/// pixels wider on every side, its size times `scale` about its centre.
+pub(crate) fn rect_over(render: &RenderSettings, points: &[Vec3], margin: f64, scale: f64) -> Rect {
+    let cam = render.camera;
+    let (mut u0, mut v0, mut u1, mut v1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
+    for p in points {
+        if let Some(q) = cam.project(&render.world_to_camera(p)) {
+            u0 = u0.min(q.x);
+            v0 = v0.min(q.y);
+            u1 = u1.max(q.x);
+            v1 = v1.max(q.y);
+        }
+    }
+    if scale != 1.0 {
+        let (cu, cv) = (0.5 * (u0 + u1), 0.5 * (v0 + v1));
+        let (hu, hv) = (0.5 * (u1 - u0) * scale, 0.5 * (v1 - v0) * scale);
+        (u0, u1, v0, v1) = (cu - hu, cu + hu, cv - hv, cv + hv);
+    }
+    Rect {
+        x: libm::floor(u0 - margin) as i64,
+        y: libm::floor(v0 - margin) as i64,
+        w: libm::ceil(u1 - u0 + 2.0 * margin) as i64,
+        h: libm::ceil(v1 - v0 + 2.0 * margin) as i64,
+    }
+}
+
 /// Largest scale a [`SceneKnobs`] field accepts (the page clamps to it).
 pub const MAX_KNOB_SCALE: f64 = 3.0;
 
 /// A scenario being recorded.
 pub struct Scenario {
-    /// Which one.
-    pub kind: ScenarioKind,
+    /// Its command-line name (`static-s`; `random-<seed>` for a drawn scene).
+    pub name: String,
+    /// For a drawn scene, everything that was drawn (`None` for a named one).
+    pub draw: Option<RandomScene>,
     /// Number of frames to record.
     pub frames: usize,
     /// Rendering settings.
@@ -276,15 +341,16 @@ pub struct Scenario {
     next: usize,
     pulls: Vec<(Pull, Vec3)>,
     boxes: Vec<MovingBox>,
+    camera_path: Option<CameraPath>,
 }
 
-fn smoothstep(x: f64) -> f64 {
+pub(crate) fn smoothstep(x: f64) -> f64 {
     let x = x.clamp(0.0, 1.0);
     x * x * (3.0 - 2.0 * x)
 }
 
 /// A box that stays where it is for the whole scene.
-fn still(shape: OccluderBox, frames: usize) -> MovingBox {
+pub(crate) fn still(shape: OccluderBox, frames: usize) -> MovingBox {
     MovingBox {
         first: 0,
         last: frames - 1,
@@ -434,23 +500,7 @@ impl Scenario {
                 let approach = start.min(15);
                 let r = rope.settings.thickness * 0.5;
                 // Palm over the held end, arm up from it, forearm away to +y.
-                for shape in [
-                    OccluderBox {
-                        min: Vec3::new(-0.035, -0.035, r + 0.005),
-                        max: Vec3::new(0.035, 0.035, r + 0.025),
-                        color: None,
-                    },
-                    OccluderBox {
-                        min: Vec3::new(-0.02, -0.02, r + 0.025),
-                        max: Vec3::new(0.02, 0.02, 0.20),
-                        color: None,
-                    },
-                    OccluderBox {
-                        min: Vec3::new(-0.02, -0.02, 0.18),
-                        max: Vec3::new(0.02, 0.28, 0.22),
-                        color: None,
-                    },
-                ] {
+                for shape in gripper(r, None) {
                     boxes.push(MovingBox {
                         first: start - approach,
                         last: frames - 1,
@@ -575,68 +625,64 @@ impl Scenario {
         }
         let mut occlusions = Vec::new();
         if let Some((i0, i1)) = hidden {
-            let cam = render.camera;
-            let (mut u0, mut v0, mut u1, mut v1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
-            for p in &rope.x[i0..=i1.min(last)] {
-                if let Some(q) = cam.project(&render.world_to_camera(p)) {
-                    u0 = u0.min(q.x);
-                    v0 = v0.min(q.y);
-                    u1 = u1.max(q.x);
-                    v1 = v1.max(q.y);
-                }
-            }
-            let m = OCCLUSION_MARGIN_PX;
-            if knobs.occluder_scale != 1.0 {
-                let (cu, cv) = (0.5 * (u0 + u1), 0.5 * (v0 + v1));
-                let (hu, hv) = (
-                    0.5 * (u1 - u0) * knobs.occluder_scale,
-                    0.5 * (v1 - v0) * knobs.occluder_scale,
-                );
-                (u0, u1, v0, v1) = (cu - hu, cu + hu, cv - hv, cv + hv);
-            }
             occlusions.push(SynthOcclusion {
                 first: at(0.3),
                 last: frames - 1,
-                rect: Rect {
-                    x: libm::floor(u0 - m) as i64,
-                    y: libm::floor(v0 - m) as i64,
-                    w: libm::ceil(u1 - u0 + 2.0 * m) as i64,
-                    h: libm::ceil(v1 - v0 + 2.0 * m) as i64,
-                },
+                rect: rect_over(
+                    &render,
+                    &rope.x[i0..=i1.min(last)],
+                    OCCLUSION_MARGIN_PX,
+                    knobs.occluder_scale,
+                ),
             });
         }
-        let pulls = pulls.into_iter().map(|p| (p, rope.x[p.particle])).collect();
-        Self {
-            kind,
+        Self::assemble(
+            kind.name(),
             frames,
             render,
             rope,
-            occlusions,
+            Events {
+                occlusions,
+                pulls,
+                boxes,
+                camera_path: None,
+            },
+            rng,
+        )
+    }
+
+    /// A scenario of a settled `rope` and its `events`, seen with `render`.
+    pub(crate) fn assemble(
+        name: String,
+        frames: usize,
+        render: RenderSettings,
+        rope: Rope,
+        events: Events,
+        rng: SplitMix64,
+    ) -> Self {
+        let pulls = events
+            .pulls
+            .into_iter()
+            .map(|p| (p, rope.x[p.particle]))
+            .collect();
+        Self {
+            name,
+            draw: None,
+            frames,
+            render,
+            rope,
+            occlusions: events.occlusions,
             rng,
             next: 0,
             pulls,
-            boxes,
+            boxes: events.boxes,
+            camera_path: events.camera_path,
         }
     }
 
-    /// HSV thresholds that fit the rope's colour in OpenCV's convention:
-    /// its hue +-15, saturation from 60 % of its own, any value above 20;
-    /// for a black, grey or white rope, the range clicking it picks
-    /// ([`HsvRange::around`]).
+    /// HSV thresholds that fit the rope's colour ([`rope_hsv`]).
     pub fn hsv(&self) -> HsvRange {
-        let c = self.render.rope_color;
-        let rgb = c.map(|x| libm::round(x * 255.0).clamp(0.0, 255.0) as u8);
-        let [h, s, v] = rgb_to_hsv(rgb);
-        if HsvRange::is_achromatic([h, s, v]) {
-            // Black, grey or white: the range a user picks by clicking it.
-            return HsvRange::around(rgb);
-        }
-        let lo = (h as i32 - 15).rem_euclid(180) as u8;
-        let hi = (h as i32 + 15).rem_euclid(180) as u8;
-        HsvRange {
-            lower: [lo, (s as f64 * 0.6) as u8, 20],
-            upper: [hi, 255, 255],
-        }
+        rope_hsv(self.render.rope_color)
     }
 
     /// The occlusion rectangles over frame `index`.
@@ -660,6 +706,9 @@ impl Scenario {
         }
         let f = self.next;
         self.next += 1;
+        if let Some(path) = &self.camera_path {
+            (self.render.camera_shift, self.render.camera_turn) = path.at(f);
+        }
         let mut targets: Vec<Vec3> = self.pulls.iter().map(|(_, origin)| *origin).collect();
         if f > 0 {
             for (k, (p, origin)) in self.pulls.iter().enumerate() {
@@ -701,6 +750,15 @@ impl Scenario {
                     OccluderBox {
                         min: b.shape.min + travel * along + lift,
                         max: b.shape.max + travel * along + lift,
+                        color: b.shape.color,
+                    }
+                }
+                BoxPath::Enter { from, frames } => {
+                    let x = (f - b.first) as f64 / frames.max(1) as f64;
+                    let off = from * (1.0 - smoothstep(x));
+                    OccluderBox {
+                        min: b.shape.min + off,
+                        max: b.shape.max + off,
                         color: b.shape.color,
                     }
                 }

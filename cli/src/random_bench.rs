@@ -1,0 +1,295 @@
+//! `upetrack compare --random <range>`: every algorithm on the drawn scenes
+//! of one seed range (`tune` to choose rules on, `report` to judge them),
+//! summarised per algorithm: median, p90 and max of each sequence's
+//! after-occlusion error, the share of frames above 20 mm, and the worst
+//! seeds with what was drawn for them.
+
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+use serde::Serialize;
+use upetrack::{Algorithm, Params};
+use upetrack_io::eval::Summary;
+use upetrack_synth::random::{
+    MotionKind, OccluderKind, RandomScene, SeedRange, ShapeDraw, DEFAULT_RANDOM_FRAMES,
+};
+use upetrack_synth::SIMULATOR_VERSION;
+
+use crate::compare::{ensure_written, update_between};
+use crate::synth::{for_each_parallel, random_dir, write_random};
+use crate::{evaluate, fmt, open_sequence, with_algorithm, CliError};
+
+/// Lines of a page between which `--update` writes the random table.
+const BEGIN_MARKER: &str = "<!-- random:begin -->";
+const END_MARKER: &str = "<!-- random:end -->";
+/// Seeds listed as the worst.
+const WORST: usize = 10;
+
+/// One drawn sequence tracked by one algorithm.
+#[derive(Serialize)]
+struct Row {
+    seed: u64,
+    /// The sequence's error after its first occluded frame (its whole mean
+    /// when nothing hides the rope), mm and px.
+    after_mm: f64,
+    after_px: f64,
+    summary: Summary,
+}
+
+/// Everything `--json` writes.
+#[derive(Serialize)]
+struct RandomComparison {
+    range: &'static str,
+    seeds: Vec<u64>,
+    frames: usize,
+    rows: Vec<Row>,
+    draws: Vec<RandomScene>,
+}
+
+/// What the simulator makes of drawn scene `seed`: its version and the
+/// draw, so that a cached sequence of another draw is never reused.
+fn fingerprint(seed: u64, frames: usize) -> Result<String, CliError> {
+    let draw = serde_json::to_string(&RandomScene::draw(seed, frames))
+        .map_err(|e| CliError(format!("random-{seed}: {e}")))?;
+    Ok(format!("simulator {SIMULATOR_VERSION}, draw {draw}\n"))
+}
+
+/// The quantile `q` of `xs` (sorted copy, nearest rank; NaN left out).
+fn quantile(xs: &[f64], q: f64) -> f64 {
+    let mut v: Vec<f64> = xs.iter().copied().filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let rank = ((q * v.len() as f64).ceil() as usize).clamp(1, v.len());
+    v[rank - 1]
+}
+
+/// One line on what was drawn for a scene.
+pub fn describe(d: &RandomScene) -> String {
+    let camera = match &d.camera.motion {
+        None => "still",
+        Some(upetrack_synth::random::CameraPath::Arm { .. }) => "on an arm",
+        Some(upetrack_synth::random::CameraPath::Handheld { .. }) => "handheld",
+    };
+    let motion = match d.motion.kind {
+        MotionKind::Rest => "at rest".to_string(),
+        k => format!("{k:?} {:.0} cm", d.motion.distance_m * 100.0),
+    };
+    let occluder = match d.occluder.kind {
+        OccluderKind::None => "no occluder".to_string(),
+        k => format!(
+            "{k:?} over {:.0} % from frame {}",
+            d.occluder.share * 100.0,
+            d.occluder.first_frame
+        ),
+    };
+    let shape = match d.shape {
+        ShapeDraw::Arc { depth } => format!("an arc {depth:.2} deep"),
+        ShapeDraw::Wave { periods, amplitude } => {
+            format!("a wave of {periods:.1} periods, {amplitude:.2} high")
+        }
+        ShapeDraw::Loop => "a loop crossing itself".into(),
+    };
+    format!(
+        "{}x{} at {:.2} m tilted {:.0} deg, {camera}; {:.2} m x {:.1} mm {:?} rope on {:?} table, {} clutter; {shape}; {motion}; {occluder}",
+        d.camera.width,
+        d.camera.height,
+        d.camera.distance_m,
+        d.camera.tilt_deg,
+        d.rope.length_m,
+        d.rope.diameter_m * 1000.0,
+        d.rope.colour,
+        d.table.kind,
+        d.placed.clutter.len(),
+    )
+}
+
+/// The table per algorithm and the worst seeds, in Markdown.
+fn tables(
+    range: SeedRange,
+    rows: &[Row],
+    draws: &[RandomScene],
+    algorithms: &[Algorithm],
+) -> String {
+    let seeds = draws.len();
+    let mut s = format!(
+        "Produced by `upetrack compare --random {}`: {seeds} drawn scenes (seeds {}..{}) of {} frames. \
+         Per sequence, the error after its first occluded frame (its whole mean when nothing hides the rope); \
+         below, the median, p90 and max of that over the sequences.\n\n\
+         | algorithm | median mm | p90 mm | max mm | median px | p90 px | max px | frames > 20 mm | sequences with a frame > 20 mm | lost frames |\n\
+         |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+        range.name,
+        draws.first().map_or(0, |d| d.seed),
+        draws.last().map_or(0, |d| d.seed),
+        draws.first().map_or(0, |d| d.frames),
+    );
+    for a in algorithms {
+        let mine: Vec<&Row> = rows
+            .iter()
+            .filter(|r| r.summary.algorithm == a.name())
+            .collect();
+        let mm: Vec<f64> = mine.iter().map(|r| r.after_mm).collect();
+        let px: Vec<f64> = mine.iter().map(|r| r.after_px).collect();
+        let frames: usize = mine.iter().map(|r| r.summary.frames).sum();
+        let above: usize = mine.iter().map(|r| r.summary.frames_above_20mm).sum();
+        let lost: usize = mine.iter().map(|r| r.summary.lost_frames).sum();
+        let failing = mine
+            .iter()
+            .filter(|r| r.summary.frames_above_20mm > 0)
+            .count();
+        let share = |k: usize| 100.0 * k as f64 / frames.max(1) as f64;
+        s += &format!(
+            "| {} | {} | {} | {} | {} | {} | {} | {} % | {failing} of {} | {} % |\n",
+            a.name(),
+            fmt(quantile(&mm, 0.5), 2),
+            fmt(quantile(&mm, 0.9), 2),
+            fmt(quantile(&mm, 1.0), 1),
+            fmt(quantile(&px, 0.5), 2),
+            fmt(quantile(&px, 0.9), 2),
+            fmt(quantile(&px, 1.0), 1),
+            fmt(share(above), 1),
+            mine.len(),
+            fmt(share(lost), 1),
+        );
+    }
+    let mut ours: Vec<&Row> = rows
+        .iter()
+        .filter(|r| r.summary.algorithm == Algorithm::Upetrack.name())
+        .collect();
+    ours.sort_by(|a, b| b.after_mm.total_cmp(&a.after_mm));
+    s += &format!(
+        "\nThe {WORST} seeds where UPETrack's error is largest (mm; each baseline's beside it):\n\n\
+         | seed | upetrack |"
+    );
+    let baselines: Vec<&Algorithm> = algorithms
+        .iter()
+        .filter(|a| **a != Algorithm::Upetrack)
+        .collect();
+    for b in &baselines {
+        s += &format!(" {} |", b.name());
+    }
+    s += " what was drawn |\n|---:|---:|";
+    s += &"---:|".repeat(baselines.len());
+    s += "---|\n";
+    for r in ours.iter().take(WORST) {
+        s += &format!("| {} | {} |", r.seed, fmt(r.after_mm, 2));
+        for b in &baselines {
+            let theirs = rows
+                .iter()
+                .find(|x| x.seed == r.seed && x.summary.algorithm == b.name())
+                .map_or(f64::NAN, |x| x.after_mm);
+            s += &format!(" {} |", fmt(theirs, 2));
+        }
+        let what = draws
+            .iter()
+            .find(|d| d.seed == r.seed)
+            .map(describe)
+            .unwrap_or_default();
+        s += &format!(" {what} |\n");
+    }
+    s
+}
+
+/// `upetrack compare --random <tune|report> [--count N] [--frames N] [--data <dir>]
+/// [--algorithm A,B] [--params <params.json>] [--json ..] [--markdown ..] [--update <page.md>]`.
+pub fn run(
+    range_name: &str,
+    count: u64,
+    frames: Option<usize>,
+    data: &Path,
+    params: Params,
+    algorithms: &[Algorithm],
+    outputs: [Option<&str>; 3],
+) -> Result<(), CliError> {
+    let range = SeedRange::parse(range_name).ok_or_else(|| {
+        CliError(format!(
+            "--random takes a seed range: {}",
+            SeedRange::ALL
+                .map(|r| format!("{} (seeds {}..{})", r.name, r.first, r.first + r.count - 1))
+                .join(" or ")
+        ))
+    })?;
+    let frames = frames.unwrap_or(DEFAULT_RANDOM_FRAMES);
+    let seeds: Vec<u64> = range.seeds(count).collect();
+    let dirs: Vec<(u64, PathBuf)> = seeds
+        .iter()
+        .map(|&s| (s, random_dir(data, s, frames)))
+        .collect();
+    for_each_parallel(&dirs, |(seed, dir)| {
+        ensure_written(dir, &fingerprint(*seed, frames)?, |partial| {
+            write_random(*seed, frames, false, partial).map(drop)
+        })
+    })?;
+    let rows = Mutex::new(Vec::new());
+    let draws = Mutex::new(Vec::new());
+    for_each_parallel(&dirs, |(seed, dir)| {
+        let seq = open_sequence(&dir.to_string_lossy(), &crate::RecordingArgs::default())?;
+        let scene: RandomScene = read_scene(dir)?;
+        for &a in algorithms {
+            let (summary, _) =
+                evaluate(&seq, &format!("random-{seed}"), with_algorithm(params, a))?;
+            let (after_mm, after_px) = if summary.occluded_mean_mm.is_finite() {
+                (summary.occluded_mean_mm, summary.occluded_mean_px)
+            } else {
+                (summary.mm.mean, summary.px.mean)
+            };
+            eprintln!(
+                "random-{seed:<5} {:9} after occlusion {:>6} mm {:>5} px",
+                a.name(),
+                fmt(after_mm, 2),
+                fmt(after_px, 2)
+            );
+            if let Ok(mut rows) = rows.lock() {
+                rows.push(Row {
+                    seed: *seed,
+                    after_mm,
+                    after_px,
+                    summary,
+                });
+            }
+        }
+        if let Ok(mut draws) = draws.lock() {
+            draws.push(scene);
+        }
+        Ok(())
+    })?;
+    let mut rows = rows
+        .into_inner()
+        .map_err(|_| CliError("a worker thread panicked".into()))?;
+    let mut draws = draws
+        .into_inner()
+        .map_err(|_| CliError("a worker thread panicked".into()))?;
+    rows.sort_by_key(|r| r.seed);
+    draws.sort_by_key(|d| d.seed);
+    let text = tables(range, &rows, &draws, algorithms);
+    println!("{text}");
+    let [json, markdown, update] = outputs;
+    if let Some(p) = json {
+        upetrack_io::write::write_json(
+            Path::new(p),
+            &RandomComparison {
+                range: range.name,
+                seeds,
+                frames,
+                rows,
+                draws,
+            },
+        )?;
+    }
+    if let Some(p) = markdown {
+        upetrack_io::write::write_file(Path::new(p), text.as_bytes())?;
+    }
+    if let Some(p) = update {
+        update_between(Path::new(p), &text, BEGIN_MARKER, END_MARKER)?;
+    }
+    Ok(())
+}
+
+/// The draw recorded beside a drawn sequence.
+fn read_scene(dir: &Path) -> Result<RandomScene, CliError> {
+    let path = dir.join(upetrack_io::synthetic::SCENE_FILE);
+    let text =
+        std::fs::read_to_string(&path).map_err(|e| CliError(format!("{}: {e}", path.display())))?;
+    serde_json::from_str(&text).map_err(|e| CliError(format!("{}: {e}", path.display())))
+}

@@ -1,0 +1,796 @@
+//! Randomised scenes: every property of a scene (rope, table, clutter,
+//! camera and its motion, the rope's shape and motion, the occluder, how
+//! much it hides and when) drawn from documented distributions by one
+//! seed, for a benchmark whose tuning and report seeds never meet.
+//!
+//! The distributions are the constants below; `docs/synthetic.md` lists
+//! them. A draw is pure parameters ([`RandomScene::draw`]); where the
+//! settled rope decides a place (clutter, boxes), [`Scenario::random`]
+//! places it and records it in [`RandomScene::placed`].
+
+mod build;
+mod camera;
+
+use alloc::vec::Vec;
+
+use serde::{Deserialize, Serialize};
+use upetrack::math::Vec3;
+use upetrack::perception::segmentation::rgb_to_hsv;
+use upetrack::rng::SplitMix64;
+use upetrack::{CameraIntrinsics, HsvRange};
+
+pub use camera::{CameraPath, Wobble};
+
+use crate::layout::loop_shape;
+use crate::render::RenderSettings;
+use crate::rope::{Rope, RopeSettings};
+use crate::scenario::{rope_hsv, Scenario};
+use crate::variant::D435I_1280X720;
+
+/// A named range of seeds: `tune` chooses rules and defaults, `report`
+/// judges them; no seed is in both.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SeedRange {
+    /// Name on the command line (`--random tune`).
+    pub name: &'static str,
+    /// First seed.
+    pub first: u64,
+    /// Number of seeds.
+    pub count: u64,
+}
+
+impl SeedRange {
+    /// The tuning range: rules and defaults are chosen on these seeds only.
+    pub const TUNE: Self = Self {
+        name: "tune",
+        first: 1_000,
+        count: 100,
+    };
+    /// The report range: results are quoted on these seeds, never tuned on.
+    pub const REPORT: Self = Self {
+        name: "report",
+        first: 2_000,
+        count: 100,
+    };
+    /// Both ranges.
+    pub const ALL: [Self; 2] = [Self::TUNE, Self::REPORT];
+
+    /// The range called `name`.
+    pub fn parse(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|r| r.name == name)
+    }
+
+    /// Its first `count` seeds (all of them when `count` is larger).
+    pub fn seeds(&self, count: u64) -> core::ops::Range<u64> {
+        self.first..self.first + count.min(self.count)
+    }
+}
+
+/// Frames of a drawn scene unless asked otherwise (1.6 s at 30 fps).
+pub const DEFAULT_RANDOM_FRAMES: usize = 48;
+/// Share of drawn scenes seen at 1280x720 (the rest at 640x480).
+pub const HD_SHARE: f64 = 0.35;
+/// Rope length, metres (uniform).
+pub const ROPE_LENGTH_M: (f64, f64) = (0.3, 1.5);
+/// Rope diameter, metres (log-uniform), raised where needed so that the
+/// rope is at least [`MIN_ROPE_WIDTH_PX`] wide in the image.
+pub const ROPE_DIAMETER_M: (f64, f64) = (0.003, 0.020);
+/// Narrowest rope in the image, pixels (a thread any thinner is not
+/// something a D435i user would track at that distance).
+pub const MIN_ROPE_WIDTH_PX: f64 = 3.0;
+/// Camera distance to the table's centre, metres (uniform), raised where
+/// needed so that the rope and its motion stay in view.
+pub const CAMERA_DISTANCE_M: (f64, f64) = (0.45, 1.0);
+/// Camera tilt from straight down, degrees (uniform).
+pub const CAMERA_TILT_DEG: (f64, f64) = (0.0, 30.0);
+/// Share of the image width kept clear at every side of the rope.
+const VIEW_MARGIN: f64 = 0.06;
+/// Share of the rope an occluder hides, when there is one (uniform).
+pub const HIDDEN_SHARE: (f64, f64) = (0.1, 0.7);
+/// Distance an end is dragged, pulled or lifted, metres (uniform).
+pub const MOTION_DISTANCE_M: (f64, f64) = (0.05, 0.15);
+/// Distance of a fast drag, metres, over a third of the sequence.
+pub const FAST_DISTANCE_M: (f64, f64) = (0.15, 0.30);
+/// Table texture contrast, times the default grain's (uniform).
+pub const TABLE_TEXTURE: (f64, f64) = (0.5, 3.0);
+/// Braid pitch, rope diameters (uniform).
+pub const BRAID_PITCH_DIAMETERS: (f64, f64) = (0.5, 1.5);
+/// Bending compliance of the rope (log-uniform; larger is softer).
+pub const BENDING_COMPLIANCE: (f64, f64) = (1e-4, 6e-4);
+/// Most clutter objects on the table (uniform from 0).
+pub const MAX_CLUTTER: u64 = 3;
+/// Chance that a clutter object has the rope's colour (a phone beside a
+/// black cable).
+pub const CLUTTER_LIKE_ROPE: f64 = 0.3;
+
+/// Kinds of rope colour.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum RopeColour {
+    /// A saturated colour of any hue.
+    Saturated,
+    /// Black or nearly.
+    Dark,
+    /// Mid grey.
+    Grey,
+    /// White or off-white.
+    White,
+    /// Two shades of one hue, strand by strand.
+    TwoTone,
+}
+
+/// Kinds of table.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum TableKind {
+    /// White or off-white.
+    Light,
+    /// Wood, light to dark.
+    Wood,
+    /// Grey laminate.
+    Grey,
+    /// Dark laminate.
+    Dark,
+}
+
+/// The shape the rope is laid in.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "kebab-case")]
+pub enum ShapeDraw {
+    /// A bow: half a sine, `depth` its height over its width.
+    Arc {
+        /// Height over width.
+        depth: f64,
+    },
+    /// A wave of `periods` periods, `amplitude` over its width.
+    Wave {
+        /// Periods across.
+        periods: f64,
+        /// Amplitude over width.
+        amplitude: f64,
+    },
+    /// A loop crossing itself once, the upper strand resting on the lower.
+    Loop,
+}
+
+/// What the rope does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MotionKind {
+    /// Lies still.
+    Rest,
+    /// One end dragged across its own direction.
+    DragSideways,
+    /// One end pulled out along its own direction: the rope slides along
+    /// itself round its bends.
+    PullAlongAxis,
+    /// One end lifted and moved a little.
+    Lift,
+    /// One end dragged fast, over a third of the sequence.
+    Fast,
+}
+
+/// Kinds of occluder.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum OccluderKind {
+    /// Nothing hides the rope.
+    None,
+    /// A rectangle declared in `dlo.json` (the contract's colour masking).
+    Rect,
+    /// A box held over the rope (seen in depth; declared nowhere).
+    Box,
+    /// A hand hovering over the rope.
+    Hand,
+    /// A gripper holding the moving end (or an end, for a resting rope).
+    Gripper,
+}
+
+/// The camera.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CameraDraw {
+    /// Image width, pixels.
+    pub width: u32,
+    /// Image height, pixels.
+    pub height: u32,
+    /// Distance to the table's centre, metres (after fitting the view).
+    pub distance_m: f64,
+    /// The distance drawn before the rope was fitted into the view.
+    pub drawn_distance_m: f64,
+    /// Tilt from straight down, degrees.
+    pub tilt_deg: f64,
+    /// How it moves; `None` for a still camera.
+    pub motion: Option<CameraPath>,
+}
+
+/// The rope.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RopeDraw {
+    /// Length, metres.
+    pub length_m: f64,
+    /// Diameter, metres.
+    pub diameter_m: f64,
+    /// Kind of colour.
+    pub colour: RopeColour,
+    /// Albedo, RGB in [0, 1].
+    pub rgb: [f64; 3],
+    /// Every other strand's albedo, for a two-tone rope.
+    pub second_rgb: Option<[f64; 3]>,
+    /// Braid pitch, metres.
+    pub braid_pitch_m: f64,
+    /// Bending compliance.
+    pub bending_compliance: f64,
+}
+
+/// The table.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TableDraw {
+    /// Kind.
+    pub kind: TableKind,
+    /// Albedo, RGB in [0, 1].
+    pub rgb: [f64; 3],
+    /// Texture contrast, times the default grain's.
+    pub texture: f64,
+}
+
+/// A flat thing lying on the table, placed away from the rope.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ClutterDraw {
+    /// Length and width, metres.
+    pub size_m: [f64; 2],
+    /// Height, metres.
+    pub height_m: f64,
+    /// Albedo, RGB in [0, 1].
+    pub rgb: [f64; 3],
+    /// Has the rope's colour (passes the rope's colour range).
+    pub like_rope: bool,
+}
+
+/// What the rope does.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct MotionDraw {
+    /// Kind.
+    pub kind: MotionKind,
+    /// The end moved: `false` the first, `true` the last.
+    pub last_end: bool,
+    /// Distance moved, metres.
+    pub distance_m: f64,
+    /// First frame of the motion.
+    pub start_frame: usize,
+    /// Last frame of the motion.
+    pub end_frame: usize,
+}
+
+/// The occluder.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct OccluderDraw {
+    /// Kind.
+    pub kind: OccluderKind,
+    /// Share of the rope it is placed over (0 without an occluder; a hand
+    /// and a gripper have their own size, placed over that run's middle
+    /// or its end).
+    pub share: f64,
+    /// Where the run it hides starts, as a share of the rope (0 at the first end).
+    pub run_start: f64,
+    /// First frame it hides the rope.
+    pub first_frame: usize,
+    /// Last frame it is there.
+    pub last_frame: usize,
+    /// Albedo of a box or a hand, RGB in [0, 1].
+    pub rgb: [f64; 3],
+}
+
+/// Where the settled rope put things, in the world frame (table at z = 0).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct Placed {
+    /// Each clutter object's corners, metres (objects that found no room
+    /// are left out).
+    pub clutter: Vec<[[f64; 3]; 2]>,
+    /// Each occluder box's corners when in place, metres.
+    pub occluder_boxes: Vec<[[f64; 3]; 2]>,
+}
+
+/// Everything drawn for one scene.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RandomScene {
+    /// The seed everything was drawn from.
+    pub seed: u64,
+    /// Frames.
+    pub frames: usize,
+    /// The camera.
+    pub camera: CameraDraw,
+    /// The rope.
+    pub rope: RopeDraw,
+    /// The table.
+    pub table: TableDraw,
+    /// Clutter.
+    pub clutter: Vec<ClutterDraw>,
+    /// The rope's shape.
+    pub shape: ShapeDraw,
+    /// Rotation of the shape on the table, degrees.
+    pub rotation_deg: f64,
+    /// The rope's motion.
+    pub motion: MotionDraw,
+    /// The occluder.
+    pub occluder: OccluderDraw,
+    /// What the settled rope decided ([`Scenario::random`] fills it).
+    pub placed: Placed,
+}
+
+/// Picks an index by weights.
+fn pick(rng: &mut SplitMix64, weights: &[f64]) -> usize {
+    let total: f64 = weights.iter().sum();
+    let mut x = rng.uniform() * total;
+    for (i, w) in weights.iter().enumerate() {
+        if x < *w {
+            return i;
+        }
+        x -= w;
+    }
+    weights.len() - 1
+}
+
+/// Log-uniform in `[lo, hi]`.
+fn log_range(rng: &mut SplitMix64, lo: f64, hi: f64) -> f64 {
+    libm::exp(rng.range(libm::log(lo), libm::log(hi.max(lo))))
+}
+
+/// RGB in [0, 1] from hue (degrees), saturation and value in [0, 1].
+pub(crate) fn hsv_to_rgb(h: f64, s: f64, v: f64) -> [f64; 3] {
+    let h = (h.rem_euclid(360.0)) / 60.0;
+    let c = v * s;
+    let x = c * (1.0 - libm::fabs(h % 2.0 - 1.0));
+    let (r, g, b) = match h as u32 {
+        0 => (c, x, 0.0),
+        1 => (x, c, 0.0),
+        2 => (0.0, c, x),
+        3 => (0.0, x, c),
+        4 => (x, 0.0, c),
+        _ => (c, 0.0, x),
+    };
+    let m = v - c;
+    [r + m, g + m, b + m]
+}
+
+/// Shading factors a flat surface's albedo is seen at (ambient, light,
+/// texture and vignetting together), for testing it against a range.
+const SHADES: [f64; 5] = [0.55, 0.7, 0.85, 1.0, 1.1];
+
+/// `true` when a surface of albedo `rgb` falls in `range` at some shade.
+pub(crate) fn passes(range: &HsvRange, rgb: [f64; 3]) -> bool {
+    SHADES.iter().any(|k| {
+        let px = rgb.map(|c| libm::round(c * k * 255.0).clamp(0.0, 255.0) as u8);
+        range.contains(rgb_to_hsv(px))
+    })
+}
+
+/// A colour of `kind` (and a second one for a two-tone rope).
+fn rope_colour(rng: &mut SplitMix64, kind: RopeColour) -> ([f64; 3], Option<[f64; 3]>) {
+    let grey = |v: f64| [v, v, v * 1.05];
+    match kind {
+        RopeColour::Saturated => (
+            hsv_to_rgb(
+                rng.range(0.0, 360.0),
+                rng.range(0.6, 0.92),
+                rng.range(0.45, 0.85),
+            ),
+            None,
+        ),
+        RopeColour::Dark => (grey(rng.range(0.025, 0.07)), None),
+        RopeColour::Grey => (grey(rng.range(0.3, 0.55)), None),
+        RopeColour::White => (grey(rng.range(0.8, 0.9)), None),
+        RopeColour::TwoTone => {
+            let (h, s) = (rng.range(0.0, 360.0), rng.range(0.6, 0.92));
+            let v = rng.range(0.6, 0.85);
+            (
+                hsv_to_rgb(h, s, v),
+                Some(hsv_to_rgb(h, s, v * rng.range(0.45, 0.65))),
+            )
+        }
+    }
+}
+
+/// A table colour of `kind`.
+fn table_colour(rng: &mut SplitMix64, kind: TableKind) -> [f64; 3] {
+    match kind {
+        TableKind::Light => {
+            let v = rng.range(0.82, 0.93);
+            [v, v * rng.range(0.98, 1.01), v * rng.range(0.95, 1.0)]
+        }
+        TableKind::Wood => hsv_to_rgb(
+            rng.range(25.0, 40.0),
+            rng.range(0.3, 0.55),
+            rng.range(0.45, 0.85),
+        ),
+        TableKind::Grey => {
+            let v = rng.range(0.45, 0.65);
+            [v, v, v * 1.03]
+        }
+        TableKind::Dark => {
+            let v = rng.range(0.12, 0.3);
+            [v, v, v * 1.05]
+        }
+    }
+}
+
+/// A colour for an occluder or clutter not in `range`: greys and muted or
+/// saturated colours, drawn again while they pass; a mid grey last.
+pub(crate) fn colour_outside(rng: &mut SplitMix64, range: &HsvRange) -> [f64; 3] {
+    for _ in 0..16 {
+        let c = match rng.below(3) {
+            0 => {
+                let v = rng.range(0.15, 0.85);
+                [v, v, v]
+            }
+            1 => hsv_to_rgb(
+                rng.range(0.0, 360.0),
+                rng.range(0.15, 0.4),
+                rng.range(0.3, 0.8),
+            ),
+            _ => hsv_to_rgb(
+                rng.range(0.0, 360.0),
+                rng.range(0.5, 0.9),
+                rng.range(0.3, 0.8),
+            ),
+        };
+        if !passes(range, c) {
+            return c;
+        }
+    }
+    [0.5, 0.5, 0.5]
+}
+
+impl RandomScene {
+    /// Draws a scene of `frames` frames (at least 1) from `seed`. Pure
+    /// parameters: the same seed gives the same scene on every platform.
+    pub fn draw(seed: u64, frames: usize) -> Self {
+        let frames = frames.clamp(1, crate::scenario::MAX_FRAMES);
+        let mut rng = SplitMix64::new(seed ^ 0x5CE7_E5EE_D000_0001);
+        let at = |x: f64| ((frames as f64 * x) as usize).min(frames - 1);
+        let hd = rng.uniform() < HD_SHARE;
+        let length = rng.range(ROPE_LENGTH_M.0, ROPE_LENGTH_M.1);
+        let shape = match pick(&mut rng, &[0.3, 0.45, 0.25]) {
+            0 => ShapeDraw::Arc {
+                depth: rng.range(0.2, 0.6),
+            },
+            1 => ShapeDraw::Wave {
+                periods: rng.range(1.0, 2.5),
+                amplitude: rng.range(0.15, 0.35),
+            },
+            _ => ShapeDraw::Loop,
+        };
+        let rotation_deg = rng.range(0.0, 360.0);
+
+        let kind = match pick(&mut rng, &[0.2, 0.25, 0.2, 0.15, 0.2]) {
+            0 => MotionKind::Rest,
+            1 => MotionKind::DragSideways,
+            2 => MotionKind::PullAlongAxis,
+            3 => MotionKind::Lift,
+            _ => MotionKind::Fast,
+        };
+        let last_end = rng.uniform() < 0.5;
+        let (distance_m, start, span) = match kind {
+            MotionKind::Rest => (0.0, 0.0, 0.0),
+            MotionKind::Fast => (
+                rng.range(FAST_DISTANCE_M.0, FAST_DISTANCE_M.1),
+                rng.range(0.3, 0.55),
+                1.0 / 3.0,
+            ),
+            _ => (
+                rng.range(MOTION_DISTANCE_M.0, MOTION_DISTANCE_M.1),
+                rng.range(0.3, 0.55),
+                rng.range(0.3, 0.45),
+            ),
+        };
+        let motion = MotionDraw {
+            kind,
+            last_end,
+            distance_m,
+            start_frame: at(start),
+            end_frame: at((start + span).min(0.95)),
+        };
+
+        let okind = match pick(&mut rng, &[0.1, 0.3, 0.2, 0.2, 0.2]) {
+            0 => OccluderKind::None,
+            1 => OccluderKind::Rect,
+            2 => OccluderKind::Box,
+            3 => OccluderKind::Hand,
+            _ => OccluderKind::Gripper,
+        };
+        let share = match okind {
+            OccluderKind::None => 0.0,
+            _ => rng.range(HIDDEN_SHARE.0, HIDDEN_SHARE.1),
+        };
+        let run_start = match rng.below(5) {
+            0 | 1 => 0.0,
+            2 => 1.0 - share,
+            _ => rng.range(0.0, 1.0 - share),
+        };
+        let first = rng.range(0.2, 0.45);
+        let leaves = rng.uniform() < 0.3;
+        let last = if leaves { rng.range(0.7, 0.9) } else { 1.0 };
+        let occluder = OccluderDraw {
+            kind: okind,
+            share,
+            run_start,
+            first_frame: at(first),
+            last_frame: if leaves { at(last) } else { frames - 1 },
+            rgb: [0.5; 3],
+        };
+
+        let tilt_deg = rng.range(CAMERA_TILT_DEG.0, CAMERA_TILT_DEG.1);
+        let drawn_distance = rng.range(CAMERA_DISTANCE_M.0, CAMERA_DISTANCE_M.1);
+        let camera_motion = match pick(&mut rng, &[0.5, 0.25, 0.25]) {
+            0 => None,
+            1 => Some(CameraPath::draw_arm(&mut rng, frames)),
+            _ => Some(CameraPath::draw_handheld(&mut rng)),
+        };
+        let intrinsics = if hd {
+            D435I_1280X720
+        } else {
+            CameraIntrinsics::D435I_640X480
+        };
+        let mut scene = Self {
+            seed,
+            frames,
+            camera: CameraDraw {
+                width: intrinsics.width,
+                height: intrinsics.height,
+                distance_m: drawn_distance,
+                drawn_distance_m: drawn_distance,
+                tilt_deg,
+                motion: camera_motion,
+            },
+            rope: RopeDraw {
+                length_m: length,
+                diameter_m: ROPE_DIAMETER_M.1,
+                colour: RopeColour::Saturated,
+                rgb: [0.5; 3],
+                second_rgb: None,
+                braid_pitch_m: 0.008,
+                bending_compliance: 2e-4,
+            },
+            table: TableDraw {
+                kind: TableKind::Light,
+                rgb: [0.9; 3],
+                texture: 1.0,
+            },
+            clutter: Vec::new(),
+            shape,
+            rotation_deg,
+            motion,
+            occluder,
+            placed: Placed::default(),
+        };
+        scene.camera.distance_m = scene.fitted_distance(drawn_distance);
+
+        // The rope's size, now that its distance is known.
+        let focal = intrinsics.fx.min(intrinsics.fy);
+        let thinnest = (MIN_ROPE_WIDTH_PX * scene.camera.distance_m / focal).max(ROPE_DIAMETER_M.0);
+        let diameter = log_range(&mut rng, thinnest.min(ROPE_DIAMETER_M.1), ROPE_DIAMETER_M.1);
+        let colour = match pick(&mut rng, &[0.4, 0.15, 0.15, 0.1, 0.2]) {
+            0 => RopeColour::Saturated,
+            1 => RopeColour::Dark,
+            2 => RopeColour::Grey,
+            3 => RopeColour::White,
+            _ => RopeColour::TwoTone,
+        };
+        let (rgb, second_rgb) = rope_colour(&mut rng, colour);
+        scene.rope = RopeDraw {
+            length_m: length,
+            diameter_m: diameter,
+            colour,
+            rgb,
+            second_rgb,
+            braid_pitch_m: diameter * rng.range(BRAID_PITCH_DIAMETERS.0, BRAID_PITCH_DIAMETERS.1),
+            bending_compliance: log_range(&mut rng, BENDING_COMPLIANCE.0, BENDING_COMPLIANCE.1),
+        };
+        let range = rope_hsv(rgb);
+        // A table in the rope's own colour range leaves nothing to find
+        // by colour: drawn again (kind and colour) until it is not.
+        let mut table = None;
+        for _ in 0..16 {
+            let kind = match pick(&mut rng, &[0.35, 0.3, 0.2, 0.15]) {
+                0 => TableKind::Light,
+                1 => TableKind::Wood,
+                2 => TableKind::Grey,
+                _ => TableKind::Dark,
+            };
+            let c = table_colour(&mut rng, kind);
+            if !passes(&range, c) {
+                table = Some((kind, c));
+                break;
+            }
+        }
+        let (kind, table_rgb) = table.unwrap_or_else(|| {
+            if rgb.iter().sum::<f64>() > 1.5 {
+                (TableKind::Dark, [0.15, 0.15, 0.16])
+            } else {
+                (TableKind::Light, [0.9, 0.9, 0.88])
+            }
+        });
+        scene.table = TableDraw {
+            kind,
+            rgb: table_rgb,
+            texture: rng.range(TABLE_TEXTURE.0, TABLE_TEXTURE.1),
+        };
+        scene.occluder.rgb = match okind {
+            OccluderKind::Hand => build::skin(&mut rng, &range),
+            _ => colour_outside(&mut rng, &range),
+        };
+        for _ in 0..rng.below(MAX_CLUTTER + 1) {
+            let like_rope = rng.uniform() < CLUTTER_LIKE_ROPE;
+            let a = rng.range(0.03, 0.15);
+            scene.clutter.push(ClutterDraw {
+                size_m: [a, rng.range(0.01, a.min(0.08))],
+                height_m: rng.range(0.005, 0.03),
+                rgb: if like_rope {
+                    rgb
+                } else {
+                    colour_outside(&mut rng, &range)
+                },
+                like_rope,
+            });
+        }
+        scene
+    }
+
+    /// The camera's intrinsics.
+    pub fn intrinsics(&self) -> CameraIntrinsics {
+        if self.camera.width == D435I_1280X720.width {
+            D435I_1280X720
+        } else {
+            CameraIntrinsics::D435I_640X480
+        }
+    }
+
+    /// How the scene is rendered at frame 0.
+    pub fn render(&self) -> RenderSettings {
+        let mut render = RenderSettings {
+            camera: self.intrinsics(),
+            camera_height: self.camera.distance_m,
+            camera_tilt: self.camera.tilt_deg.to_radians(),
+            rope_color: self.rope.rgb,
+            rope_second_color: self.rope.second_rgb,
+            table_color: self.table.rgb,
+            table_texture: self.table.texture,
+            braid_pitch: self.rope.braid_pitch_m,
+            ..RenderSettings::default()
+        };
+        if let Some(path) = &self.camera.motion {
+            (render.camera_shift, render.camera_turn) = path.at(0);
+        }
+        render
+    }
+
+    /// The rope's physical settings: 10 mm particles (31 to 151 of them).
+    pub fn rope_settings(&self) -> RopeSettings {
+        RopeSettings {
+            length: self.rope.length_m,
+            thickness: self.rope.diameter_m,
+            particles: (libm::round(self.rope.length_m / 0.01) as usize + 1).clamp(31, 151),
+            bending_compliance: self.rope.bending_compliance,
+            ..RopeSettings::default()
+        }
+    }
+
+    /// The shape the rope is laid along, rotated.
+    fn layout(&self) -> Vec<Vec3> {
+        let raw: Vec<Vec3> = match self.shape {
+            ShapeDraw::Arc { depth } => wave(0.5, depth),
+            ShapeDraw::Wave { periods, amplitude } => wave(periods, amplitude),
+            ShapeDraw::Loop => loop_shape(),
+        };
+        let n = raw.len().max(1) as f64;
+        let c = raw.iter().sum::<Vec3>() / n;
+        let a = self.rotation_deg.to_radians();
+        let (s, co) = (libm::sin(a), libm::cos(a));
+        raw.iter()
+            .map(|p| {
+                let d = p - c;
+                Vec3::new(co * d.x - s * d.y, s * d.x + co * d.y, 0.0)
+            })
+            .collect()
+    }
+
+    /// A rope of `settings` laid along the drawn shape, the middle of its
+    /// extent at the table's centre (under the camera).
+    pub(crate) fn laid(&self, settings: RopeSettings) -> Rope {
+        let mut rope = Rope::laid_along(&self.layout(), settings);
+        let (mut lo, mut hi) = (Vec3::repeat(f64::MAX), Vec3::repeat(f64::MIN));
+        for p in &rope.x {
+            lo = lo.inf(p);
+            hi = hi.sup(p);
+        }
+        let c = (lo + hi) * 0.5;
+        for p in rope.x.iter_mut() {
+            p.x -= c.x;
+            p.y -= c.y;
+        }
+        rope
+    }
+
+    /// The smallest distance from `drawn` up (by 4 % steps) at which the
+    /// laid rope, the moved end's target and the camera's motion stay
+    /// inside the image with a margin.
+    fn fitted_distance(&self, drawn: f64) -> f64 {
+        let rope = self.laid(self.rope_settings_for_fit());
+        let mut points = rope.x.clone();
+        let n = points.len();
+        if self.motion.kind != MotionKind::Rest && n > 6 {
+            let (end, inner) = if self.motion.last_end {
+                (n - 1, n - 6)
+            } else {
+                (0, 5)
+            };
+            let out = (points[end] - points[inner]).normalize();
+            let side = Vec3::new(-out.y, out.x, 0.0);
+            for dir in [out, side, -side] {
+                points.push(points[end] + dir * self.motion.distance_m);
+            }
+        }
+        let poses: Vec<usize> = (0..self.frames).step_by(3).collect();
+        let mut distance = drawn;
+        for _ in 0..60 {
+            let mut render = RenderSettings {
+                camera: self.intrinsics(),
+                camera_height: distance,
+                camera_tilt: self.camera.tilt_deg.to_radians(),
+                ..RenderSettings::default()
+            };
+            let cam = render.camera;
+            let (mu, mv) = (
+                VIEW_MARGIN * cam.width as f64,
+                VIEW_MARGIN * cam.width as f64,
+            );
+            let fits = poses.iter().all(|&f| {
+                if let Some(path) = &self.camera.motion {
+                    (render.camera_shift, render.camera_turn) = path.at(f);
+                }
+                points.iter().all(|p| {
+                    cam.project(&render.world_to_camera(p)).is_some_and(|q| {
+                        q.x >= mu
+                            && q.x <= cam.width as f64 - mu
+                            && q.y >= mv
+                            && q.y <= cam.height as f64 - mv
+                    })
+                })
+            });
+            if fits {
+                break;
+            }
+            distance *= 1.04;
+        }
+        distance
+    }
+
+    fn rope_settings_for_fit(&self) -> RopeSettings {
+        RopeSettings {
+            length: self.rope.length_m,
+            ..RopeSettings::default()
+        }
+    }
+}
+
+/// `periods` periods of a sine across a unit width, `amplitude` high.
+fn wave(periods: f64, amplitude: f64) -> Vec<Vec3> {
+    (0..400)
+        .map(|i| {
+            let t = i as f64 / 399.0;
+            Vec3::new(
+                t,
+                amplitude * libm::sin(core::f64::consts::TAU * periods * t),
+                0.0,
+            )
+        })
+        .collect()
+}
+
+impl Scenario {
+    /// The scene drawn from `seed` ([`RandomScene::draw`]), settled and
+    /// ready to record; its draw (and where things were placed) is in
+    /// [`Scenario::draw`].
+    pub fn random(seed: u64, frames: usize) -> Self {
+        build::scenario(RandomScene::draw(seed, frames))
+    }
+}
