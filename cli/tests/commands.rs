@@ -148,3 +148,73 @@ fn score_tables_a_result_file_as_eval_does_and_refuses_one_that_does_not_fit() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("theirs.json"), "{err}");
 }
+
+/// `synth random` writes the drawn scene beside the contract's files (the
+/// same draw for the same seed), `--count` writes one folder per seed,
+/// options that the draw decides are refused, and `compare --random` names
+/// the seed ranges when given another.
+#[test]
+fn synth_random_writes_its_draw_and_compare_random_checks_its_range() {
+    let one = temp_dir("random-one");
+    let two = temp_dir("random-two");
+    for dir in [&one, &two] {
+        let out = run(&[
+            "synth",
+            "random",
+            dir.to_str().expect("utf-8"),
+            "--seed",
+            "2004",
+            "--frames",
+            "2",
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let scene =
+        |dir: &PathBuf| std::fs::read_to_string(dir.join("scene.json")).expect("scene.json");
+    assert_eq!(scene(&one), scene(&two));
+    let draw: serde_json::Value = serde_json::from_str(&scene(&one)).expect("json");
+    assert_eq!(draw["seed"], 2004);
+    assert!(draw["rope"]["length_m"]
+        .as_f64()
+        .is_some_and(|l| (0.3..=1.5).contains(&l)));
+    let seq = Sequence::open(FolderSource::new(&one)).expect("opens");
+    assert_eq!(seq.groundtruth.len(), 2);
+    assert_eq!(
+        seq.camera.width,
+        draw["camera"]["width"].as_u64().expect("width") as u32
+    );
+
+    let batch = temp_dir("random-batch");
+    let out = run(&[
+        "synth",
+        "random",
+        batch.to_str().expect("utf-8"),
+        "--seed",
+        "5",
+        "--count",
+        "2",
+        "--frames",
+        "1",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for seed in [5, 6] {
+        assert!(batch.join(format!("random-{seed}-1f/scene.json")).is_file());
+    }
+    assert!(!batch.join("random-7-1f").exists());
+
+    let refused = run(&["synth", "random", batch.to_str().expect("utf-8"), "--hd"]);
+    assert!(!refused.status.success());
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("drawn from the seed"));
+    let bad = run(&["compare", "--random", "everything", "--count", "1"]);
+    assert!(!bad.status.success());
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(err.contains("tune") && err.contains("report"), "{err}");
+}

@@ -136,6 +136,7 @@ impl Params {
                 extend_short_ends: false,
                 extend_under_occluders: false,
                 keep_end_run_spacing: false,
+                follow_shared_motion: false,
                 ..upe
             },
             ..Self::default()

@@ -288,6 +288,13 @@ pub const PARAMETERS: &[ParamInfo] = &[
         ParamKind::Bool,
     ),
     p(
+        "follow_shared_motion",
+        Upetrack,
+        "shared motion",
+        "Hidden nodes move with the rigid motion most visible nodes share (a moving camera, the rope carried whole) before the rules for a resting rope judge the rest",
+        ParamKind::Bool,
+    ),
+    p(
         "anchor_across_only",
         Upetrack,
         "anchors across",

@@ -594,4 +594,35 @@ mod tests {
         assert!((mean - 600.0).abs() < 0.2, "mean {mean}");
         assert!((sd - expected).abs() < 0.15, "sd {sd} vs {expected}");
     }
+
+    #[test]
+    fn a_turned_camera_keeps_orthonormal_axes_and_no_turn_is_the_plain_pose() {
+        let plain = RenderSettings {
+            camera_tilt: 0.3,
+            ..RenderSettings::default()
+        };
+        let turned = RenderSettings {
+            camera_turn: [0.05, -0.03, 0.2],
+            camera_shift: [0.01, 0.02, -0.03],
+            ..plain
+        };
+        let (a, b) = (plain.pose(), turned.pose());
+        for i in 0..3 {
+            for j in 0..3 {
+                let dot = b.rows[i].dot(&b.rows[j]);
+                assert!((dot - if i == j { 1.0 } else { 0.0 }).abs() < 1e-12);
+            }
+        }
+        // A right-handed frame still: x cross y is z.
+        assert!((b.rows[0].cross(&b.rows[1]) - b.rows[2]).norm() < 1e-12);
+        assert!((b.centre - a.centre - Vec3::new(0.01, 0.02, -0.03)).norm() < 1e-12);
+        // About z alone the optical axis stays; x turns by the angle.
+        let roll = RenderSettings {
+            camera_turn: [0.0, 0.0, 0.2],
+            ..plain
+        }
+        .pose();
+        assert!((roll.rows[2] - a.rows[2]).norm() < 1e-12);
+        assert!((roll.rows[0].dot(&a.rows[0]) - libm::cos(0.2)).abs() < 1e-12);
+    }
 }

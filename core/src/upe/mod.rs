@@ -1,7 +1,8 @@
 //! UPETrack's own per-frame step, one module per stage in the paper's order:
 //! [`registration`] (GMM-EM of the visible nodes, after the shared
 //! [`crate::visibility`] test of Fig. 3),
-//! Eq. 1-5), [`occlusion`] (Unidirectional Position Estimation of the hidden
+//! Eq. 1-5), [`shared_motion`] (the rigid motion the visible rope shares,
+//! which the hidden nodes follow), [`occlusion`] (Unidirectional Position Estimation of the hidden
 //! nodes, Eq. 6-11) and [`resampling`] (Eq. 12-15). [`UpeTrackParams`] holds
 //! the step's parameters; [`UpeTrackStep`] runs the stages.
 
@@ -11,6 +12,7 @@ pub mod length;
 pub mod occlusion;
 pub mod registration;
 pub mod resampling;
+pub mod shared_motion;
 pub mod slide;
 
 use free_space::{clear_free_space, FreeSpaceReport};
@@ -21,6 +23,7 @@ use length::{
 use occlusion::{estimate_hidden_with_sweeps, HiddenMotion, UpeCoefficients, UpeReport};
 use registration::{register_observed, EmReport, EmSettings, MAX_EM_ITERATIONS};
 use resampling::resample_smooth;
+use shared_motion::shared_motion;
 
 use crate::polyline::resample_uniform;
 
@@ -116,6 +119,15 @@ pub struct UpeTrackParams {
     /// hidden run in turn. Default true; false is the paper's resampling
     /// of the whole rope.
     pub keep_end_run_spacing: bool,
+    /// Move the hidden nodes with the rigid motion most visible nodes
+    /// share (`shared_motion`: a camera on an arm or in a hand, the whole
+    /// rope carried) before Eq. 6-11 and the rules for a resting rope judge
+    /// what is left of the visible nodes' motion. Default false: on the
+    /// randomised tuning range it helps where the camera moves on an arm
+    /// and hurts where the rope itself moves in front of a still camera
+    /// (`docs/algorithm-notes.md`); set it when the camera moves. False
+    /// is the paper's step.
+    pub follow_shared_motion: bool,
     /// Weight of the uniform outlier component (`w`, Eq. 3). Default 0.1.
     pub outlier_weight: f64,
     /// EM stops when no node moves more than this in an iteration, metres. Default 0.1 mm.
@@ -147,6 +159,7 @@ impl Default for UpeTrackParams {
             extend_short_ends: true,
             extend_under_occluders: true,
             keep_end_run_spacing: true,
+            follow_shared_motion: false,
             outlier_weight: 0.1,
             em_tolerance: 1e-4,
             em_max_iterations: 10,
@@ -277,7 +290,7 @@ fn run_step(
     mut trace: Option<&mut explain::StepExplanation>,
 ) -> StepOutput<UpeTrackReport> {
     let mut nodes = input.previous.to_vec();
-    let em = {
+    let em_report = {
         let mut iterations = Vec::new();
         let mut observe = |it: registration::EmIteration<'_>| {
             if trace.is_some() {
@@ -297,8 +310,26 @@ fn run_step(
             &settings.em(),
             &mut observe,
         );
+        (em, iterations)
+    };
+    // The previous nodes moved as the visible rope moved together: what
+    // the rules below take as "the previous frame".
+    let previous: Vec<Vec3> = match settings.follow_shared_motion {
+        true => match shared_motion(
+            input.previous,
+            &nodes,
+            input.visible,
+            libm::sqrt(settings.min_variance),
+        ) {
+            Some(motion) => input.previous.iter().map(|p| motion.apply(p)).collect(),
+            None => input.previous.to_vec(),
+        },
+        false => input.previous.to_vec(),
+    };
+    let em = {
+        let (em, iterations) = em_report;
         if settings.anchor_across_only {
-            occlusion::hold_anchors_along_rope(&mut nodes, input.previous, input.visible);
+            occlusion::hold_anchors_along_rope(&mut nodes, &previous, input.visible);
         }
         if let Some(t) = trace.as_deref_mut() {
             t.em = iterations;
@@ -307,7 +338,7 @@ fn run_step(
         em
     };
     let (upe, sweeps) =
-        estimate_hidden_with_sweeps(&mut nodes, input.visible, input.previous, &settings.upe());
+        estimate_hidden_with_sweeps(&mut nodes, input.visible, &previous, &settings.upe());
     if let Some(t) = trace.as_deref_mut() {
         t.sweeps = sweeps;
         t.end_runs = occlusion::hidden_end_runs(input.visible);

@@ -794,3 +794,171 @@ impl Scenario {
         build::scenario(RandomScene::draw(seed, frames))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Enough seeds that every kind of every draw turns up.
+    const SEEDS: core::ops::Range<u64> = 0..400;
+
+    #[test]
+    fn a_seed_draws_the_same_scene_every_time_and_another_seed_another() {
+        assert_eq!(RandomScene::draw(7, 48), RandomScene::draw(7, 48));
+        assert_ne!(RandomScene::draw(7, 48), RandomScene::draw(8, 48));
+        let (a, b) = (Scenario::random(7, 4), Scenario::random(7, 4));
+        assert_eq!(a.draw, b.draw);
+        assert_eq!(a.rope.x, b.rope.x);
+        assert_eq!(a.occlusions, b.occlusions);
+        assert!(a.draw.is_some() && a.name == "random-7");
+    }
+
+    #[test]
+    fn the_tuning_and_report_ranges_never_meet() {
+        let (t, r) = (SeedRange::TUNE, SeedRange::REPORT);
+        assert!(t.count >= 100 && r.count >= 100);
+        assert!(t.seeds(u64::MAX).all(|s| !r.seeds(u64::MAX).contains(&s)));
+        assert_eq!(SeedRange::parse("report"), Some(r));
+        assert_eq!(r.seeds(3), 2000..2003);
+    }
+
+    #[test]
+    fn draws_cover_the_stated_ranges() {
+        let draws: Vec<RandomScene> = SEEDS.map(|s| RandomScene::draw(s, 48)).collect();
+        let span = |f: &dyn Fn(&RandomScene) -> f64| {
+            let v: Vec<f64> = draws.iter().map(f).collect();
+            (
+                v.iter().copied().fold(f64::MAX, f64::min),
+                v.iter().copied().fold(f64::MIN, f64::max),
+            )
+        };
+        let within = |(lo, hi): (f64, f64), (a, b): (f64, f64), reach: f64| {
+            lo >= a && hi <= b && lo < a + reach * (b - a) && hi > b - reach * (b - a)
+        };
+        assert!(within(span(&|d| d.rope.length_m), ROPE_LENGTH_M, 0.05));
+        assert!(within(span(&|d| d.rope.diameter_m), ROPE_DIAMETER_M, 0.1));
+        assert!(within(span(&|d| d.camera.tilt_deg), CAMERA_TILT_DEG, 0.05));
+        assert!(within(
+            span(&|d| d.camera.drawn_distance_m),
+            CAMERA_DISTANCE_M,
+            0.05
+        ));
+        let shares: Vec<&RandomScene> = draws
+            .iter()
+            .filter(|d| d.occluder.kind != OccluderKind::None)
+            .collect();
+        let lo = shares.iter().map(|d| d.occluder.share).fold(1.0, f64::min);
+        let hi = shares.iter().map(|d| d.occluder.share).fold(0.0, f64::max);
+        assert!(
+            lo >= 0.1 && lo < 0.15 && hi <= 0.7 && hi > 0.65,
+            "{lo} {hi}"
+        );
+        for d in &draws {
+            assert!(d.camera.distance_m >= d.camera.drawn_distance_m);
+            let f = d.intrinsics().fx;
+            assert!(d.rope.diameter_m * f / d.camera.distance_m >= MIN_ROPE_WIDTH_PX - 1e-9);
+            assert!(d.clutter.len() as u64 <= MAX_CLUTTER);
+            assert!(d.motion.start_frame <= d.motion.end_frame && d.motion.end_frame < 48);
+        }
+        let has = |p: &dyn Fn(&RandomScene) -> bool| draws.iter().any(p);
+        for c in [
+            RopeColour::Saturated,
+            RopeColour::Dark,
+            RopeColour::Grey,
+            RopeColour::White,
+            RopeColour::TwoTone,
+        ] {
+            assert!(has(&|d| d.rope.colour == c), "{c:?}");
+        }
+        for t in [
+            TableKind::Light,
+            TableKind::Wood,
+            TableKind::Grey,
+            TableKind::Dark,
+        ] {
+            assert!(has(&|d| d.table.kind == t), "{t:?}");
+        }
+        for m in [
+            MotionKind::Rest,
+            MotionKind::DragSideways,
+            MotionKind::PullAlongAxis,
+            MotionKind::Lift,
+            MotionKind::Fast,
+        ] {
+            assert!(has(&|d| d.motion.kind == m), "{m:?}");
+        }
+        for o in [
+            OccluderKind::None,
+            OccluderKind::Rect,
+            OccluderKind::Box,
+            OccluderKind::Hand,
+            OccluderKind::Gripper,
+        ] {
+            assert!(has(&|d| d.occluder.kind == o), "{o:?}");
+        }
+        assert!(has(&|d| matches!(d.shape, ShapeDraw::Loop)));
+        assert!(has(&|d| matches!(d.shape, ShapeDraw::Arc { .. })));
+        assert!(has(&|d| matches!(d.shape, ShapeDraw::Wave { .. })));
+        assert!(has(&|d| d.camera.motion.is_none()));
+        assert!(has(&|d| matches!(
+            d.camera.motion,
+            Some(CameraPath::Arm { .. })
+        )));
+        assert!(has(&|d| matches!(
+            d.camera.motion,
+            Some(CameraPath::Handheld { .. })
+        )));
+        assert!(has(&|d| d.camera.width == 1280) && has(&|d| d.camera.width == 640));
+        for k in 0..=MAX_CLUTTER as usize {
+            assert!(has(&|d| d.clutter.len() == k), "{k} clutter");
+        }
+        assert!(has(&|d| d.clutter.iter().any(|c| c.like_rope)));
+    }
+
+    #[test]
+    fn no_table_passes_the_ropes_colour_range() {
+        for s in SEEDS {
+            let d = RandomScene::draw(s, 48);
+            assert!(
+                !passes(&rope_hsv(d.rope.rgb), d.table.rgb),
+                "seed {s}: {d:?}"
+            );
+            assert!(passes(&rope_hsv(d.rope.rgb), d.rope.rgb), "seed {s}");
+        }
+    }
+
+    #[test]
+    fn the_settled_rope_starts_in_view_and_the_camera_path_starts_where_drawn() {
+        for seed in 2000..2012 {
+            let s = Scenario::random(seed, 48);
+            let cam = s.render.camera;
+            for p in &s.rope.x {
+                let q = cam
+                    .project(&s.render.world_to_camera(p))
+                    .expect("in front of the camera");
+                assert!(
+                    q.x >= 0.0 && q.y >= 0.0 && q.x < cam.width as f64 && q.y < cam.height as f64,
+                    "seed {seed}: {q:?}"
+                );
+            }
+            if let Some(path) = s.draw.as_ref().and_then(|d| d.camera.motion) {
+                assert_eq!(path.at(0), ([0.0; 3], [0.0; 3]), "seed {seed}");
+            }
+        }
+    }
+
+    #[test]
+    fn an_arm_ends_its_move_where_drawn() {
+        let mut rng = SplitMix64::new(3);
+        let path = CameraPath::draw_arm(&mut rng, 48);
+        let CameraPath::Arm {
+            shift, turn, end, ..
+        } = path
+        else {
+            panic!("an arm");
+        };
+        assert_eq!(path.at(end), (shift, turn));
+        let moved = libm::sqrt(shift.iter().map(|x| x * x).sum::<f64>());
+        assert!(moved > 0.5 * camera::ARM_SHIFT_M.0 && moved <= camera::ARM_SHIFT_M.1);
+    }
+}
