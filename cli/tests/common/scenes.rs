@@ -59,9 +59,19 @@ pub fn each_frame(
     variant: Variant,
     frames: usize,
     params: Params,
+    on: impl FnMut(&SynthFrame, &FrameOutput, bool),
+) {
+    let s = Scenario::with_rope(kind, frames, 4, variant.render(), variant.rope());
+    each_frame_of(s, params, on);
+}
+
+/// [`each_frame`] of any scenario (a drawn one, say).
+pub fn each_frame_of(
+    mut s: Scenario,
+    params: Params,
     mut on: impl FnMut(&SynthFrame, &FrameOutput, bool),
 ) {
-    let mut s = Scenario::with_rope(kind, frames, 4, variant.render(), variant.rope());
+    let name = s.name.clone();
     let camera = s.camera();
     let mut tracker = Tracker::new(params, s.camera(), s.hsv()).expect("tracker");
     let occlusions = s.occlusions.clone();
@@ -76,7 +86,7 @@ pub fn each_frame(
         let out = tracker.process(&frame, &rects).expect("process");
         assert!(
             !out.is_lost(),
-            "{kind:?} frame {} lost: {:?}",
+            "{name} frame {} lost: {:?}",
             f.index,
             out.status
         );
