@@ -153,6 +153,35 @@ fn tables(
             fmt(share(lost), 1),
         );
     }
+    s += "\nThe whole rope's length (each sequence's largest relative error of the node polyline's length against the true centre line's, over its frames) and the visible nodes' mean offset from the true centre line along the viewing ray (positive: behind it), over the sequences:\n\n\
+         | algorithm | length error max: median | p90 | max | ray offset mm: median | p10 | p90 | median of its size |\n\
+         |---|---:|---:|---:|---:|---:|---:|---:|\n";
+    for a in algorithms {
+        let mine: Vec<&Row> = rows
+            .iter()
+            .filter(|r| r.summary.algorithm == a.name())
+            .collect();
+        let length: Vec<f64> = mine
+            .iter()
+            .map(|r| 100.0 * r.summary.length_error_max)
+            .collect();
+        let offset: Vec<f64> = mine
+            .iter()
+            .map(|r| r.summary.visible_ray_offset_mm)
+            .collect();
+        let size: Vec<f64> = offset.iter().map(|o| o.abs()).collect();
+        s += &format!(
+            "| {} | {} % | {} % | {} % | {} | {} | {} | {} |\n",
+            a.name(),
+            fmt(quantile(&length, 0.5), 1),
+            fmt(quantile(&length, 0.9), 1),
+            fmt(quantile(&length, 1.0), 1),
+            fmt(quantile(&offset, 0.5), 2),
+            fmt(quantile(&offset, 0.1), 2),
+            fmt(quantile(&offset, 0.9), 2),
+            fmt(quantile(&size, 0.5), 2),
+        );
+    }
     let mut ours: Vec<&Row> = rows
         .iter()
         .filter(|r| r.summary.algorithm == Algorithm::Upetrack.name())

@@ -138,6 +138,29 @@ pub struct Summary {
     pub hidden_length_error_max: f64,
     /// The same, averaged over the frames with a hidden run.
     pub hidden_length_error_mean: f64,
+    /// Largest relative error of the whole tracked rope's length (its node
+    /// polyline) against the true centre line's, over the frames tracked
+    /// (0.03 = 3 %).
+    pub length_error_max: f64,
+    /// Mean signed offset of the visible nodes from the true centre line
+    /// along the viewing ray, millimetres (positive: behind it, farther
+    /// from the camera), over every visible node of every frame tracked.
+    pub visible_ray_offset_mm: f64,
+}
+
+/// The signed offset of `p` from its nearest point `q` on the polyline
+/// `line` along the viewing ray through `q` (camera at the origin),
+/// metres; positive when `p` lies behind `q`.
+pub fn ray_offset(p: &Vec3, line: &[Vec3]) -> Option<f64> {
+    let q = line
+        .windows(2)
+        .map(|w| {
+            let t = upetrack::math::nearest_on_segment(p, &w[0], &w[1]);
+            w[0] + (w[1] - w[0]) * t
+        })
+        .min_by(|a, b| (a - p).norm_squared().total_cmp(&(b - p).norm_squared()))?;
+    let n = q.norm();
+    (n > 0.0).then(|| (p - q).dot(&(q / n)))
 }
 
 /// The relative length error of the worst hidden run of one frame: each
@@ -208,6 +231,27 @@ pub fn summarise(
             hidden_length_error(&nodes, &f.visible, true_length)
         })
         .collect();
+    // The whole rope's length, and the visible nodes' offset along the ray.
+    let mut whole_length_errors = Vec::new();
+    let mut ray_offsets = Vec::new();
+    for f in result.frames.iter().filter(|f| !f.lost) {
+        let Some(gt) = truth.get(f.frame).and_then(|t| t.as_ref()) else {
+            continue;
+        };
+        let nodes: Vec<Vec3> = f
+            .nodes
+            .iter()
+            .map(|p| Vec3::new(p[0], p[1], p[2]))
+            .collect();
+        let true_length = upetrack::polyline::polyline_length(gt);
+        if true_length > 0.0 && nodes.len() > 1 {
+            whole_length_errors
+                .push((upetrack::polyline::polyline_length(&nodes) / true_length - 1.0).abs());
+        }
+        for (p, _) in nodes.iter().zip(&f.visible).filter(|(_, v)| **v) {
+            ray_offsets.extend(ray_offset(p, gt).map(|o| o * 1000.0));
+        }
+    }
     let track: Vec<f64> = result.frames.iter().map(|f| f.track_ms).collect();
     let total: Vec<f64> = result.frames.iter().map(|f| f.total_ms).collect();
     Summary {
@@ -230,12 +274,26 @@ pub fn summarise(
         clear_mean_px: mean(&clear),
         hidden_length_error_max: length_errors.iter().copied().fold(f64::NAN, f64::max),
         hidden_length_error_mean: mean(&length_errors),
+        length_error_max: whole_length_errors.iter().copied().fold(f64::NAN, f64::max),
+        visible_ray_offset_mm: mean(&ray_offsets),
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_ray_offset_is_signed_along_the_line_of_sight() {
+        // A line across the view 0.5 m ahead; a point 2 mm behind it and
+        // 3 mm beside it along the line.
+        let line = [Vec3::new(-0.1, 0.0, 0.5), Vec3::new(0.1, 0.0, 0.5)];
+        let behind = ray_offset(&Vec3::new(0.003, 0.0, 0.502), &line).expect("offset");
+        assert!((behind - 0.002).abs() < 1e-4, "{behind}");
+        let before = ray_offset(&Vec3::new(0.0, 0.001, 0.497), &line).expect("offset");
+        assert!((before + 0.003).abs() < 1e-4, "{before}");
+        assert_eq!(ray_offset(&Vec3::zeros(), &line[..1]), None);
+    }
 
     #[test]
     fn hidden_runs_are_measured_with_their_visible_neighbours() {
