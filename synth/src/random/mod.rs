@@ -356,12 +356,38 @@ pub(crate) fn hsv_to_rgb(h: f64, s: f64, v: f64) -> [f64; 3] {
 /// texture and vignetting together), for testing it against a range.
 const SHADES: [f64; 5] = [0.55, 0.7, 0.85, 1.0, 1.1];
 
+/// Colour noise a surface is tested with, 8-bit levels per channel: twice
+/// the renderer's standard deviation (2.5 levels), which JPEG's chroma
+/// subsampling about doubles again at edges.
+const NOISE_LEVELS: f64 = 5.0;
+
 /// `true` when a surface of albedo `rgb` falls in `range` at some shade.
 pub(crate) fn passes(range: &HsvRange, rgb: [f64; 3]) -> bool {
+    passes_textured(range, rgb, 0.0)
+}
+
+/// `true` when some pixel of a surface of albedo `rgb` can fall in
+/// `range`: at every shade, with its texture darkening or lightening it by
+/// `grain` (a share), and colour noise of [`NOISE_LEVELS`] on each channel
+/// either way.
+pub(crate) fn passes_textured(range: &HsvRange, rgb: [f64; 3], grain: f64) -> bool {
     SHADES.iter().any(|k| {
-        let px = rgb.map(|c| libm::round(c * k * 255.0).clamp(0.0, 255.0) as u8);
-        range.contains(rgb_to_hsv(px))
+        [1.0 - grain, 1.0 + grain].iter().any(|g| {
+            (0..8).any(|signs: u32| {
+                let px = [0, 1, 2].map(|c| {
+                    let n = if signs & (1 << c) == 0 { -1.0 } else { 1.0 };
+                    libm::round(rgb[c] * k * g * 255.0 + n * NOISE_LEVELS).clamp(0.0, 255.0) as u8
+                });
+                range.contains(rgb_to_hsv(px))
+            })
+        })
     })
+}
+
+/// How far the table's grain darkens or lightens it at `texture` times
+/// the default contrast (the default grain spans about +-0.045 about 0.97).
+fn table_grain(texture: f64) -> f64 {
+    0.045 * texture / 0.97
 }
 
 /// A colour of `kind` (and a second one for a two-tone rope).
@@ -586,10 +612,11 @@ impl RandomScene {
             bending_compliance: log_range(&mut rng, BENDING_COMPLIANCE.0, BENDING_COMPLIANCE.1),
         };
         let range = rope_hsv(rgb);
-        // A table in the rope's own colour range leaves nothing to find
-        // by colour: drawn again (kind and colour) until it is not.
+        // A table whose pixels can fall in the rope's own colour range
+        // leaves nothing to find by colour: drawn again (kind, colour and
+        // grain) until none can.
         let mut table = None;
-        for _ in 0..16 {
+        for _ in 0..32 {
             let kind = match pick(&mut rng, &[0.35, 0.3, 0.2, 0.15]) {
                 0 => TableKind::Light,
                 1 => TableKind::Wood,
@@ -597,22 +624,23 @@ impl RandomScene {
                 _ => TableKind::Dark,
             };
             let c = table_colour(&mut rng, kind);
-            if !passes(&range, c) {
-                table = Some((kind, c));
+            let texture = rng.range(TABLE_TEXTURE.0, TABLE_TEXTURE.1);
+            if !passes_textured(&range, c, table_grain(texture)) {
+                table = Some((kind, c, texture));
                 break;
             }
         }
-        let (kind, table_rgb) = table.unwrap_or_else(|| {
+        let (kind, table_rgb, texture) = table.unwrap_or_else(|| {
             if rgb.iter().sum::<f64>() > 1.5 {
-                (TableKind::Dark, [0.15, 0.15, 0.16])
+                (TableKind::Dark, [0.15, 0.15, 0.16], 1.0)
             } else {
-                (TableKind::Light, [0.9, 0.9, 0.88])
+                (TableKind::Light, [0.9, 0.9, 0.88], 1.0)
             }
         });
         scene.table = TableDraw {
             kind,
             rgb: table_rgb,
-            texture: rng.range(TABLE_TEXTURE.0, TABLE_TEXTURE.1),
+            texture,
         };
         scene.occluder.rgb = match okind {
             OccluderKind::Hand => build::skin(&mut rng, &range),
