@@ -10,6 +10,7 @@ use upetrack::{Algorithm, Params};
 use upetrack_io::eval::Summary;
 use upetrack_synth::{Scenario, ScenarioKind, Variant, SIMULATOR_VERSION};
 
+use crate::bench_files::{ensure_written, update_between};
 use crate::synth::write_scenario;
 use crate::{
     evaluate, fmt, load_params, markdown_table, open_sequence, with_algorithm, Args, CliError,
@@ -164,9 +165,6 @@ fn fingerprint(case: &Case) -> String {
     format!("simulator {SIMULATOR_VERSION}, first frame {h:016x}\n")
 }
 
-/// The file in a case's folder that records its [`fingerprint`].
-const FINGERPRINT_FILE: &str = "synth-fingerprint.txt";
-
 /// Writes the case's sequence unless a complete one written by the same
 /// simulator is already there.
 fn ensure_sequence(data: &Path, case: &Case) -> Result<PathBuf, CliError> {
@@ -175,37 +173,6 @@ fn ensure_sequence(data: &Path, case: &Case) -> Result<PathBuf, CliError> {
         write_scenario(scenario(case), partial).map(drop)
     })?;
     Ok(dir)
-}
-
-/// Runs `write` into a fresh `<dir>.partial` and renames it to `dir`,
-/// unless `dir` is complete and its fingerprint file says `print`.
-pub(crate) fn ensure_written(
-    dir: &Path,
-    print: &str,
-    write: impl FnOnce(&Path) -> Result<(), CliError>,
-) -> Result<(), CliError> {
-    let cached = std::fs::read_to_string(dir.join(FINGERPRINT_FILE)).ok();
-    if dir.join("groundtruth.json").is_file() && cached.as_deref() == Some(print) {
-        return Ok(());
-    }
-    if dir.exists() {
-        eprintln!(
-            "{} was written by another simulator: writing it again",
-            dir.display()
-        );
-        std::fs::remove_dir_all(dir).map_err(|e| CliError(format!("{}: {e}", dir.display())))?;
-    }
-    eprintln!("writing {} ...", dir.display());
-    let partial = dir.with_extension("partial");
-    if partial.exists() {
-        std::fs::remove_dir_all(&partial)
-            .map_err(|e| CliError(format!("{}: {e}", partial.display())))?;
-    }
-    write(&partial)?;
-    std::fs::write(partial.join(FINGERPRINT_FILE), print)
-        .map_err(|e| CliError(format!("{}: {e}", partial.display())))?;
-    std::fs::rename(&partial, dir).map_err(|e| CliError(format!("{}: {e}", dir.display())))?;
-    Ok(())
 }
 
 /// One row of the protocol table.
@@ -422,30 +389,4 @@ const FIGURE_SCENES: [&str; 2] = ["static-s", "dynamic-pull"];
 /// Replaces what lies between the markers of `page` with `text`.
 fn update_page(page: &Path, text: &str) -> Result<(), CliError> {
     update_between(page, text, BEGIN_MARKER, END_MARKER)
-}
-
-/// Replaces what lies between the lines `begin` and `end` of `page` with `text`.
-pub(crate) fn update_between(
-    page: &Path,
-    text: &str,
-    begin: &str,
-    end: &str,
-) -> Result<(), CliError> {
-    let old =
-        std::fs::read_to_string(page).map_err(|e| CliError(format!("{}: {e}", page.display())))?;
-    let (Some(a), Some(b)) = (old.find(begin), old.find(end)) else {
-        return Err(CliError(format!(
-            "{}: needs the lines {begin} and {end}",
-            page.display()
-        )));
-    };
-    if b < a {
-        return Err(CliError(format!(
-            "{}: {end} comes before {begin}",
-            page.display()
-        )));
-    }
-    let new = format!("{}{begin}\n{text}\n{}", &old[..a], &old[b..]);
-    upetrack_io::write::write_file(page, new.as_bytes())?;
-    Ok(())
 }

@@ -2,6 +2,7 @@
 //! write synthetic scenarios, and benchmark the per-frame cost.
 
 mod bench;
+mod bench_files;
 mod compare;
 mod figure;
 mod overlay;

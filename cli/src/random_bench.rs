@@ -15,7 +15,7 @@ use upetrack_synth::random::{
 };
 use upetrack_synth::SIMULATOR_VERSION;
 
-use crate::compare::{ensure_written, update_between};
+use crate::bench_files::{ensure_written, update_between};
 use crate::synth::{for_each_parallel, random_dir, write_random};
 use crate::{evaluate, fmt, open_sequence, with_algorithm, CliError};
 

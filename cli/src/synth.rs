@@ -92,10 +92,10 @@ pub fn cmd_synth(raw: &[String]) -> Result<(), CliError> {
         ))
     })?;
     let frames: usize = args.number("frames", 150)?;
-    if frames == 0 || frames > upetrack_synth::scenario::MAX_FRAMES {
+    if frames == 0 || frames > upetrack_synth::MAX_FRAMES {
         return Err(CliError(format!(
             "--frames must be in 1..={}",
-            upetrack_synth::scenario::MAX_FRAMES
+            upetrack_synth::MAX_FRAMES
         )));
     }
     let seed: u64 = args.number("seed", 1)?;
@@ -154,10 +154,10 @@ pub fn random_dir(dir: &Path, seed: u64, frames: usize) -> std::path::PathBuf {
 /// folders `random-<seed>-<frames>f` inside it, two at a time.
 fn synth_random(args: &Args, dir: &Path) -> Result<(), CliError> {
     let frames: usize = args.number("frames", DEFAULT_RANDOM_FRAMES)?;
-    if frames == 0 || frames > upetrack_synth::scenario::MAX_FRAMES {
+    if frames == 0 || frames > upetrack_synth::MAX_FRAMES {
         return Err(CliError(format!(
             "--frames must be in 1..={}",
-            upetrack_synth::scenario::MAX_FRAMES
+            upetrack_synth::MAX_FRAMES
         )));
     }
     for refused in ["hd", "variant", "depth-noise", "y4m"] {

@@ -9,6 +9,9 @@
 
 extern crate alloc;
 
+pub mod camera_path;
+mod drawn;
+mod ease;
 mod layout;
 pub mod random;
 pub mod render;
@@ -21,3 +24,6 @@ pub use render::{RenderSettings, Rendered};
 pub use rope::{Rope, RopeSettings};
 pub use scenario::{Scenario, ScenarioKind, SceneKnobs, SynthFrame, SIMULATOR_VERSION};
 pub use variant::Variant;
+
+/// Most frames one scenario records.
+pub const MAX_FRAMES: usize = 100_000;

@@ -9,8 +9,9 @@ use alloc::vec;
 use alloc::vec::Vec;
 
 use upetrack::math::{self, Vec3};
+use upetrack::perception::segmentation::rgb_to_hsv;
 use upetrack::rng::SplitMix64;
-use upetrack::CameraIntrinsics;
+use upetrack::{CameraIntrinsics, HsvRange};
 
 /// Stereo baseline of the D435i, metres.
 pub const D435I_BASELINE: f64 = 0.050;
@@ -548,6 +549,25 @@ pub fn render(
         }
     }
     Rendered { rgb, depth }
+}
+
+/// HSV thresholds that fit a rope of albedo `color` (RGB in [0, 1]) in
+/// OpenCV's convention: its hue +-15, saturation from 60 % of its own, any
+/// value above 20; for a black, grey or white rope, the range clicking it
+/// picks ([`HsvRange::around`]).
+pub fn rope_hsv(color: [f64; 3]) -> HsvRange {
+    let rgb = color.map(|x| libm::round(x * 255.0).clamp(0.0, 255.0) as u8);
+    let [h, s, v] = rgb_to_hsv(rgb);
+    if HsvRange::is_achromatic([h, s, v]) {
+        // Black, grey or white: the range a user picks by clicking it.
+        return HsvRange::around(rgb);
+    }
+    let lo = (h as i32 - 15).rem_euclid(180) as u8;
+    let hi = (h as i32 + 15).rem_euclid(180) as u8;
+    HsvRange {
+        lower: [lo, (s as f64 * 0.6) as u8, 20],
+        upper: [hi, 255, 255],
+    }
 }
 
 #[cfg(test)]

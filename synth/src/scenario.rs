@@ -6,15 +6,16 @@ use alloc::string::String;
 use alloc::vec::Vec;
 
 use upetrack::math::Vec3;
-use upetrack::perception::segmentation::rgb_to_hsv;
 use upetrack::rng::SplitMix64;
 use upetrack::{CameraIntrinsics, HsvRange, Rect};
 
+use crate::camera_path::CameraPath;
+use crate::ease::smoothstep;
 use crate::layout::{
     arc_shape, bends_shape, gripper, lift_upper_strand, loop_shape, lying, s_shape,
 };
-use crate::random::{CameraPath, RandomScene};
-use crate::render::{hidden_by_boxes, render, OccluderBox, RenderSettings};
+use crate::random::RandomScene;
+use crate::render::{hidden_by_boxes, render, rope_hsv, OccluderBox, RenderSettings};
 use crate::rope::{Rope, RopeSettings};
 use crate::variant::Variant;
 
@@ -25,8 +26,7 @@ pub const SETTLING_FRAMES: usize = 45;
 /// simulator, the renderer or a scenario changes their frames, so that
 /// cached sequences (`upetrack compare`) are written again.
 pub const SIMULATOR_VERSION: u32 = 2;
-/// Most frames one scenario records.
-pub const MAX_FRAMES: usize = 100_000;
+pub use crate::MAX_FRAMES;
 /// Margin added around the projected rope segment that an occlusion hides, pixels.
 const OCCLUSION_MARGIN_PX: f64 = 14.0;
 
@@ -169,25 +169,6 @@ impl ScenarioKind {
             Self::CableDesk => Variant::DESK_BLACK_CABLE,
             _ => Variant::BASE,
         }
-    }
-}
-
-/// HSV thresholds that fit a rope of albedo `color` (RGB in [0, 1]) in
-/// OpenCV's convention: its hue +-15, saturation from 60 % of its own, any
-/// value above 20; for a black, grey or white rope, the range clicking it
-/// picks ([`HsvRange::around`]).
-pub fn rope_hsv(color: [f64; 3]) -> HsvRange {
-    let rgb = color.map(|x| libm::round(x * 255.0).clamp(0.0, 255.0) as u8);
-    let [h, s, v] = rgb_to_hsv(rgb);
-    if HsvRange::is_achromatic([h, s, v]) {
-        // Black, grey or white: the range a user picks by clicking it.
-        return HsvRange::around(rgb);
-    }
-    let lo = (h as i32 - 15).rem_euclid(180) as u8;
-    let hi = (h as i32 + 15).rem_euclid(180) as u8;
-    HsvRange {
-        lower: [lo, (s as f64 * 0.6) as u8, 20],
-        upper: [hi, 255, 255],
     }
 }
 
@@ -342,11 +323,6 @@ pub struct Scenario {
     pulls: Vec<(Pull, Vec3)>,
     boxes: Vec<MovingBox>,
     camera_path: Option<CameraPath>,
-}
-
-pub(crate) fn smoothstep(x: f64) -> f64 {
-    let x = x.clamp(0.0, 1.0);
-    x * x * (3.0 - 2.0 * x)
 }
 
 /// A box that stays where it is for the whole scene.
@@ -839,6 +815,7 @@ impl Scenario {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use upetrack::perception::segmentation::rgb_to_hsv;
 
     #[test]
     fn names_round_trip() {

@@ -5,11 +5,8 @@
 //!
 //! The distributions are the constants below; `docs/synthetic.md` lists
 //! them. A draw is pure parameters ([`RandomScene::draw`]); where the
-//! settled rope decides a place (clutter, boxes), [`Scenario::random`]
+//! settled rope decides a place (clutter, boxes), [`Scenario::random`](crate::Scenario::random)
 //! places it and records it in [`RandomScene::placed`].
-
-mod build;
-mod camera;
 
 use alloc::vec::Vec;
 
@@ -19,12 +16,12 @@ use upetrack::perception::segmentation::rgb_to_hsv;
 use upetrack::rng::SplitMix64;
 use upetrack::{CameraIntrinsics, HsvRange};
 
-pub use camera::{CameraPath, Wobble};
+pub use crate::camera_path::{CameraPath, Wobble};
 
 use crate::layout::loop_shape;
+use crate::render::rope_hsv;
 use crate::render::RenderSettings;
 use crate::rope::{Rope, RopeSettings};
-use crate::scenario::{rope_hsv, Scenario};
 use crate::variant::D435I_1280X720;
 
 /// A named range of seeds: `tune` chooses rules and defaults, `report`
@@ -313,7 +310,7 @@ pub struct RandomScene {
     pub motion: MotionDraw,
     /// The occluder.
     pub occluder: OccluderDraw,
-    /// What the settled rope decided ([`Scenario::random`] fills it).
+    /// What the settled rope decided ([`Scenario::random`](crate::Scenario::random) fills it).
     pub placed: Placed,
 }
 
@@ -470,7 +467,7 @@ impl RandomScene {
     /// Draws a scene of `frames` frames (at least 1) from `seed`. Pure
     /// parameters: the same seed gives the same scene on every platform.
     pub fn draw(seed: u64, frames: usize) -> Self {
-        let frames = frames.clamp(1, crate::scenario::MAX_FRAMES);
+        let frames = frames.clamp(1, crate::MAX_FRAMES);
         let mut rng = SplitMix64::new(seed ^ 0x5CE7_E5EE_D000_0001);
         let at = |x: f64| ((frames as f64 * x) as usize).min(frames - 1);
         let hd = rng.uniform() < HD_SHARE;
@@ -643,7 +640,7 @@ impl RandomScene {
             texture,
         };
         scene.occluder.rgb = match okind {
-            OccluderKind::Hand => build::skin(&mut rng, &range),
+            OccluderKind::Hand => skin(&mut rng, &range),
             _ => colour_outside(&mut rng, &range),
         };
         for _ in 0..rng.below(MAX_CLUTTER + 1) {
@@ -814,18 +811,29 @@ fn wave(periods: f64, amplitude: f64) -> Vec<Vec3> {
         .collect()
 }
 
-impl Scenario {
-    /// The scene drawn from `seed` ([`RandomScene::draw`]), settled and
-    /// ready to record; its draw (and where things were placed) is in
-    /// [`Scenario::draw`].
-    pub fn random(seed: u64, frames: usize) -> Self {
-        build::scenario(RandomScene::draw(seed, frames))
-    }
+/// Skin tones (albedo), light to dark.
+const SKIN: [[f64; 3]; 4] = [
+    [0.86, 0.68, 0.58],
+    [0.76, 0.57, 0.45],
+    [0.58, 0.40, 0.30],
+    [0.36, 0.24, 0.18],
+];
+/// A glove, for a rope whose colour range takes every skin tone.
+const GLOVE: [f64; 3] = [0.2, 0.3, 0.6];
+
+/// A skin tone outside the rope's colour range (a glove if none is).
+fn skin(rng: &mut SplitMix64, range: &HsvRange) -> [f64; 3] {
+    let first = rng.below(SKIN.len() as u64) as usize;
+    (0..SKIN.len())
+        .map(|k| SKIN[(first + k) % SKIN.len()])
+        .find(|c| !passes(range, *c))
+        .unwrap_or(GLOVE)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scenario::Scenario;
 
     /// Enough seeds that every kind of every draw turns up.
     const SEEDS: core::ops::Range<u64> = 0..400;
@@ -878,7 +886,7 @@ mod tests {
         let lo = shares.iter().map(|d| d.occluder.share).fold(1.0, f64::min);
         let hi = shares.iter().map(|d| d.occluder.share).fold(0.0, f64::max);
         assert!(
-            lo >= 0.1 && lo < 0.15 && hi <= 0.7 && hi > 0.65,
+            (0.1..0.15).contains(&lo) && hi <= 0.7 && hi > 0.65,
             "{lo} {hi}"
         );
         for d in &draws {
@@ -987,6 +995,9 @@ mod tests {
         };
         assert_eq!(path.at(end), (shift, turn));
         let moved = libm::sqrt(shift.iter().map(|x| x * x).sum::<f64>());
-        assert!(moved > 0.5 * camera::ARM_SHIFT_M.0 && moved <= camera::ARM_SHIFT_M.1);
+        assert!(
+            moved > 0.5 * crate::camera_path::ARM_SHIFT_M.0
+                && moved <= crate::camera_path::ARM_SHIFT_M.1
+        );
     }
 }

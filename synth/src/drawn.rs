@@ -6,24 +6,14 @@ use alloc::vec::Vec;
 
 use upetrack::math::Vec3;
 use upetrack::rng::SplitMix64;
-use upetrack::HsvRange;
 
-use super::{passes, MotionKind, OccluderKind, RandomScene, ShapeDraw};
 use crate::layout::{gripper, lift_upper_strand};
+use crate::random::{MotionKind, OccluderKind, RandomScene, ShapeDraw};
 use crate::render::{OccluderBox, RenderSettings};
 use crate::scenario::{
     rect_over, still, BoxPath, Events, MovingBox, Pull, Scenario, SynthOcclusion, SETTLING_FRAMES,
 };
 
-/// Skin tones (albedo), light to dark.
-const SKIN: [[f64; 3]; 4] = [
-    [0.86, 0.68, 0.58],
-    [0.76, 0.57, 0.45],
-    [0.58, 0.40, 0.30],
-    [0.36, 0.24, 0.18],
-];
-/// A glove, for a rope whose colour range takes every skin tone.
-const GLOVE: [f64; 3] = [0.2, 0.3, 0.6];
 /// Clear space kept between clutter and the rope, metres.
 const CLUTTER_CLEARANCE: f64 = 0.03;
 /// Tries at placing one clutter object.
@@ -32,15 +22,6 @@ const CLUTTER_TRIES: usize = 40;
 const BOX_ENTRY: f64 = 0.35;
 /// How high a hand starts above its place before coming down, metres.
 const HAND_ENTRY: f64 = 0.3;
-
-/// A skin tone outside the rope's colour range (a glove if none is).
-pub(crate) fn skin(rng: &mut SplitMix64, range: &HsvRange) -> [f64; 3] {
-    let first = rng.below(SKIN.len() as u64) as usize;
-    (0..SKIN.len())
-        .map(|k| SKIN[(first + k) % SKIN.len()])
-        .find(|c| !passes(range, *c))
-        .unwrap_or(GLOVE)
-}
 
 fn corners(b: &OccluderBox) -> [[f64; 3]; 2] {
     [[b.min.x, b.min.y, b.min.z], [b.max.x, b.max.y, b.max.z]]
@@ -63,7 +44,7 @@ fn render_at(draw: &RandomScene, f: usize) -> RenderSettings {
 }
 
 /// The scenario of `draw`, its placements recorded in it.
-pub(crate) fn scenario(mut draw: RandomScene) -> Scenario {
+fn scenario(mut draw: RandomScene) -> Scenario {
     let settings = draw.rope_settings();
     let mut rope = draw.laid(settings);
     if draw.shape == ShapeDraw::Loop {
@@ -304,4 +285,13 @@ fn hand(at: Vec3, z0: f64, along_x: bool, dir: f64, rgb: [f64; 3]) -> Vec<Occlud
         put(0.045, 0.11, v - 0.0085, v + 0.0085, -0.005);
     }
     parts
+}
+
+impl Scenario {
+    /// The scene drawn from `seed` ([`RandomScene::draw`]), settled and
+    /// ready to record; its draw (and where things were placed) is in
+    /// [`Scenario::draw`].
+    pub fn random(seed: u64, frames: usize) -> Self {
+        scenario(RandomScene::draw(seed, frames))
+    }
 }

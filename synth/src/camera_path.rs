@@ -5,7 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use upetrack::rng::SplitMix64;
 
-use crate::scenario::smoothstep;
+use crate::ease::smoothstep;
 
 /// Frames per second the camera's motion is timed in (the simulator's rate).
 const FPS: f64 = 30.0;

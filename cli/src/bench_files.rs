@@ -1,0 +1,67 @@
+//! Files the benchmarks keep: sequences written once and reused until the
+//! simulator that wrote them changes, and the marked sections of a results
+//! page that `--update` rewrites.
+
+use std::path::Path;
+
+use crate::CliError;
+
+/// The file in a cached sequence's folder that records what wrote it.
+const FINGERPRINT_FILE: &str = "synth-fingerprint.txt";
+
+/// Runs `write` into a fresh `<dir>.partial` and renames it to `dir`,
+/// unless `dir` is complete and its fingerprint file says `print`.
+pub(crate) fn ensure_written(
+    dir: &Path,
+    print: &str,
+    write: impl FnOnce(&Path) -> Result<(), CliError>,
+) -> Result<(), CliError> {
+    let cached = std::fs::read_to_string(dir.join(FINGERPRINT_FILE)).ok();
+    if dir.join("groundtruth.json").is_file() && cached.as_deref() == Some(print) {
+        return Ok(());
+    }
+    if dir.exists() {
+        eprintln!(
+            "{} was written by another simulator: writing it again",
+            dir.display()
+        );
+        std::fs::remove_dir_all(dir).map_err(|e| CliError(format!("{}: {e}", dir.display())))?;
+    }
+    eprintln!("writing {} ...", dir.display());
+    let partial = dir.with_extension("partial");
+    if partial.exists() {
+        std::fs::remove_dir_all(&partial)
+            .map_err(|e| CliError(format!("{}: {e}", partial.display())))?;
+    }
+    write(&partial)?;
+    std::fs::write(partial.join(FINGERPRINT_FILE), print)
+        .map_err(|e| CliError(format!("{}: {e}", partial.display())))?;
+    std::fs::rename(&partial, dir).map_err(|e| CliError(format!("{}: {e}", dir.display())))?;
+    Ok(())
+}
+
+/// Replaces what lies between the lines `begin` and `end` of `page` with `text`.
+pub(crate) fn update_between(
+    page: &Path,
+    text: &str,
+    begin: &str,
+    end: &str,
+) -> Result<(), CliError> {
+    let old =
+        std::fs::read_to_string(page).map_err(|e| CliError(format!("{}: {e}", page.display())))?;
+    let (Some(a), Some(b)) = (old.find(begin), old.find(end)) else {
+        return Err(CliError(format!(
+            "{}: needs the lines {begin} and {end}",
+            page.display()
+        )));
+    };
+    if b < a {
+        return Err(CliError(format!(
+            "{}: {end} comes before {begin}",
+            page.display()
+        )));
+    }
+    let new = format!("{}{begin}\n{text}\n{}", &old[..a], &old[b..]);
+    upetrack_io::write::write_file(page, new.as_bytes())?;
+    Ok(())
+}
