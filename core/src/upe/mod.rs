@@ -1,7 +1,7 @@
 //! UPETrack's own per-frame step, one module per stage in the paper's order:
 //! [`registration`] (GMM-EM of the visible nodes, after the shared
 //! [`crate::visibility`] test of Fig. 3),
-//! Eq. 1-5), [`shared_motion`] (the rigid motion the visible rope shares,
+//! Eq. 1-5), [`mod@shared_motion`] (the rigid motion the visible rope shares,
 //! which the hidden nodes follow), [`occlusion`] (Unidirectional Position Estimation of the hidden
 //! nodes, Eq. 6-11) and [`resampling`] (Eq. 12-15). [`UpeTrackParams`] holds
 //! the step's parameters; [`UpeTrackStep`] runs the stages.

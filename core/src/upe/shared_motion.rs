@@ -117,7 +117,7 @@ fn rotation_of(omega: &Vec3) -> Matrix3<f64> {
 /// `current`, judged across the rope only: a node's slide along the rope
 /// under EM is its parameterisation, not the rope's motion, and a slide
 /// along a straight visible stretch is no evidence of a move. The fit
-/// ([`fit_across`]) is reweighted with Cauchy weights on the residuals,
+/// (`fit_across`) is reweighted with Cauchy weights on the residuals,
 /// their spread taken robustly (`MAD`) but never below `noise` (metres:
 /// how far a node of a still rope moves from frame to frame), starting
 /// from weights on the moves themselves, so that a few nodes moving on
