@@ -104,6 +104,8 @@ fn cases(frames_override: Option<usize>) -> Vec<Case> {
         other(ScenarioKind::CrossingLoop, "hd-thin-blue"),
         other(ScenarioKind::InPieces, "near-thin-green"),
     ]);
+    // The whole rope's length: a rope sliding round a hidden bend.
+    out.push(Case::new(ScenarioKind::PulledThrough, 90, 1));
     for c in out.iter_mut() {
         c.tuning = c.variant.is_base() && TUNING.contains(&c.kind.name().as_str());
     }

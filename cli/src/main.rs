@@ -44,7 +44,8 @@ and --color-topic / --depth-topic when the streams are not found by name;
 --align x86-sse|portable picks librealsense's aligner (default: the recording's era).
 Algorithms: upetrack (default), cpd, trackdlo, cdcpd2; --algorithm overrides the parameter file's.
 Scenarios (`upetrack scenarios` describes them): static-s, dynamic-pull, tip-drag, sweep-10..sweep-70,
-lifted-swing, fast-pull, gripper-swing, box-over-end, box-over-middle, cable-desk, crossing-loop, in-pieces;
+lifted-swing, fast-pull, gripper-swing, box-over-end, box-over-middle, cable-desk, crossing-loop, in-pieces,
+pulled-through;
 synth --rope-prior writes the rope's length and diameter into dlo.json.
 synth random draws a whole scene from the seed (docs/synthetic.md lists the distributions) and writes
 what it drew in scene.json; --count N writes seeds S..S+N-1 into folders random-<seed>-<frames>f.

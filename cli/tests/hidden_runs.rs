@@ -1,12 +1,14 @@
 //! Regression tests for two ways a hidden run moved when the rope did not
 //! (`docs/algorithm-notes.md`, "Anchors keep EM's move across the rope" and
-//! "A resting rope keeps its hidden shape").
+//! "A resting rope keeps its hidden shape"), and one way it did not change
+//! when the rope slid through it ("The whole rope does not stretch").
 
-use upetrack::Params;
-use upetrack_synth::ScenarioKind;
+use upetrack::polyline::polyline_length;
+use upetrack::{Algorithm, Params};
+use upetrack_synth::{ScenarioKind, Variant};
 
 mod common;
-use common::scenes::{max, mean, track_scenario};
+use common::scenes::{each_frame, max, mean, track_scenario};
 
 /// Regression for "a hidden tip creeps out of its occluder while the rope
 /// rests" (TrackDLO's protocol with 40 and 60 % of the rope hidden): EM
@@ -54,4 +56,51 @@ fn a_hidden_bend_beside_resting_nodes_is_not_pulled_straighter() {
     );
     assert!(mean(&resting) < 2.6, "{:.2} mm", mean(&resting));
     assert!(mean(&resting) < 0.93 * mean(&fixed_alpha));
+}
+
+/// Whole-rope length error of each frame (0.05 = 5 %) and the error of
+/// each frame after the occlusion begins, mm, of `pulled-through`.
+fn pulled_through(params: Params) -> (Vec<f64>, Vec<f64>) {
+    let (mut lengths, mut occluded) = (Vec::new(), Vec::new());
+    let kind = ScenarioKind::PulledThrough;
+    each_frame(kind, Variant::BASE, 90, params, |f, out, is_occluded| {
+        let truth = polyline_length(&f.groundtruth);
+        lengths.push((polyline_length(&out.nodes) - truth).abs() / truth);
+        if is_occluded {
+            let e = upetrack::metrics::frame_error(&out.nodes, &f.groundtruth).expect("error");
+            occluded.push(e * 1000.0);
+        }
+    });
+    (lengths, occluded)
+}
+
+/// Regression for "a rope pulled along its axis through an occluder grows":
+/// a U's bend hidden while one arm is pulled out 10 cm, so the rope slides
+/// round the hidden bend. The hidden bend kept its size while the true one
+/// tightened, and the tracked rope grew by the length pulled out (6.6 %
+/// over its rest length, 3.9 mm after the occlusion began). With the
+/// hidden middle runs giving up what the visible rope took
+/// (`conserve_middle_lengths`, under `conserve_length`) it keeps its length.
+#[test]
+fn a_rope_pulled_through_an_occluder_keeps_its_length_and_tightens_the_hidden_bend() {
+    let (lengths, kept) = pulled_through(Params::default());
+    let mut params = Params::default();
+    params.upetrack.conserve_length = false;
+    let (grown_lengths, grown) = pulled_through(params);
+    let (_, trackdlo) = pulled_through(Params {
+        algorithm: Algorithm::Trackdlo,
+        ..Params::default()
+    });
+    eprintln!(
+        "pulled-through: length error max {:.1} % (conserve_length off {:.1} %), \
+         after occlusion {:.2} mm (off {:.2}, TrackDLO {:.2})",
+        100.0 * max(&lengths),
+        100.0 * max(&grown_lengths),
+        mean(&kept),
+        mean(&grown),
+        mean(&trackdlo)
+    );
+    assert!(max(&lengths) < 0.04, "{:.3}", max(&lengths));
+    assert!(mean(&kept) < 0.9 * mean(&grown));
+    assert!(mean(&kept) < 0.7 * mean(&trackdlo));
 }

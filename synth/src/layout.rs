@@ -37,6 +37,30 @@ pub(crate) fn arc_shape() -> Vec<Vec3> {
         .collect()
 }
 
+/// A U (hairpin) 0.80 m long: two arms 0.32 m long along x, 0.10 m apart,
+/// joined at -x by a half circle; the second arm's end at +x.
+pub(crate) fn hairpin_shape() -> Vec<Vec3> {
+    const ARM: f64 = 0.32;
+    const RADIUS: f64 = 0.05;
+    let bend = core::f64::consts::PI * RADIUS;
+    let total = 2.0 * ARM + bend;
+    let x0 = 0.5 * (ARM - RADIUS);
+    (0..400)
+        .map(|i| {
+            let s = total * i as f64 / 399.0;
+            if s < ARM {
+                Vec3::new(x0 - s, RADIUS, 0.0)
+            } else if s < ARM + bend {
+                let a = (s - ARM) / RADIUS;
+                let cx = x0 - ARM;
+                Vec3::new(cx - RADIUS * libm::sin(a), RADIUS * libm::cos(a), 0.0)
+            } else {
+                Vec3::new(x0 - ARM + (s - ARM - bend), -RADIUS, 0.0)
+            }
+        })
+        .collect()
+}
+
 /// A cable laid in several bends: two periods of a sine, about 1 m long.
 pub(crate) fn bends_shape() -> Vec<Vec3> {
     (0..400)

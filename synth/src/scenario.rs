@@ -12,7 +12,7 @@ use upetrack::{CameraIntrinsics, HsvRange, Rect};
 use crate::camera_path::CameraPath;
 use crate::ease::smoothstep;
 use crate::layout::{
-    arc_shape, bends_shape, gripper, lift_upper_strand, loop_shape, lying, s_shape,
+    arc_shape, bends_shape, gripper, hairpin_shape, lift_upper_strand, loop_shape, lying, s_shape,
 };
 use crate::random::RandomScene;
 use crate::render::{hidden_by_boxes, render, rope_hsv, OccluderBox, RenderSettings};
@@ -29,6 +29,9 @@ pub const SIMULATOR_VERSION: u32 = 2;
 pub use crate::MAX_FRAMES;
 /// Margin added around the projected rope segment that an occlusion hides, pixels.
 const OCCLUSION_MARGIN_PX: f64 = 14.0;
+
+/// How far `pulled-through` pulls its arm out along its axis, metres.
+const PULL_THROUGH_M: f64 = 0.10;
 
 /// Which scenario.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -64,11 +67,14 @@ pub enum ScenarioKind {
     /// A rope under two strips (a ruler and a pen) lying across it: its
     /// mask is in three pieces.
     InPieces,
+    /// A U whose bend is hidden while one arm is pulled out along its own
+    /// axis: the rope slides round the hidden bend, which tightens.
+    PulledThrough,
 }
 
 impl ScenarioKind {
     /// One of each scenario (the sweep at 30 %).
-    pub const EXAMPLES: [Self; 12] = [
+    pub const EXAMPLES: [Self; 13] = [
         Self::StaticS,
         Self::DynamicPull,
         Self::TipDrag,
@@ -81,10 +87,11 @@ impl ScenarioKind {
         Self::CableDesk,
         Self::CrossingLoop,
         Self::InPieces,
+        Self::PulledThrough,
     ];
 
     /// Every scenario's command-line name.
-    pub const NAMES: [&'static str; 12] = [
+    pub const NAMES: [&'static str; 13] = [
         "static-s",
         "dynamic-pull",
         "tip-drag",
@@ -97,6 +104,7 @@ impl ScenarioKind {
         "cable-desk",
         "crossing-loop",
         "in-pieces",
+        "pulled-through",
     ];
 
     /// Largest share of the rope a sweep may hide, percent.
@@ -116,6 +124,7 @@ impl ScenarioKind {
             "cable-desk" => Self::CableDesk,
             "crossing-loop" => Self::CrossingLoop,
             "in-pieces" => Self::InPieces,
+            "pulled-through" => Self::PulledThrough,
             other => {
                 let k: u8 = other.strip_prefix("sweep-")?.parse().ok()?;
                 if !(10..=Self::MAX_SWEEP_PERCENT).contains(&k) {
@@ -141,6 +150,7 @@ impl ScenarioKind {
             Self::CableDesk => "cable-desk".into(),
             Self::CrossingLoop => "crossing-loop".into(),
             Self::InPieces => "in-pieces".into(),
+            Self::PulledThrough => "pulled-through".into(),
         }
     }
 
@@ -159,6 +169,7 @@ impl ScenarioKind {
             Self::CableDesk => "a thin black cable in several bends on a desk beside a black phone, a pen and a USB stick, all in a black colour range; one end dragged 8 cm",
             Self::CrossingLoop => "a rope lying in a loop that crosses over itself (the upper strand resting on the lower); one tail pulled 6 cm, tightening the loop",
             Self::InPieces => "a rope under a ruler and a pen lying across it (its mask in three pieces) while one end is dragged 10 cm",
+            Self::PulledThrough => "a U whose bend is hidden from 30 % of the frames on; from 40 % one arm is pulled 10 cm along its own axis, so the rope slides round the hidden bend",
         }
     }
 
@@ -381,6 +392,7 @@ impl Scenario {
             | ScenarioKind::OcclusionSweep { .. } => s_shape(),
             ScenarioKind::CableDesk => bends_shape(),
             ScenarioKind::CrossingLoop => loop_shape(),
+            ScenarioKind::PulledThrough => hairpin_shape(),
             _ => arc_shape(),
         };
         // Small seeded variation of the layout: a rotation and a shift.
@@ -575,6 +587,17 @@ impl Scenario {
                     };
                     boxes.push(still(shape, frames));
                 }
+            }
+            ScenarioKind::PulledThrough => {
+                // The bend and a few centimetres of each arm.
+                hidden = Some((frac(0.30), frac(0.70)));
+                pulls.push(Pull {
+                    particle: last,
+                    start: at(0.4),
+                    end: at(0.9),
+                    offset: Vec3::new(PULL_THROUGH_M, 0.0, 0.0),
+                    circular: false,
+                });
             }
             ScenarioKind::FastPull => {
                 pulls.push(Pull {

@@ -8,7 +8,7 @@
 
 use alloc::vec::Vec;
 
-use super::slide::hidden_runs;
+use super::slide::{hidden_runs, HiddenRun};
 use crate::math::{self, Vec3};
 use crate::polyline::polyline_length;
 
@@ -288,6 +288,103 @@ pub fn resample_with_end_runs_at_rest(
     (out.len() == count && out.iter().all(math::is_finite)).then_some(out)
 }
 
+/// Bisection steps of [`conserve_middle_lengths`]: the factor to 2^-30.
+const BISECTION_STEPS: usize = 30;
+
+/// The points of `curve` with their offsets from the chord `curve[0]` ->
+/// `curve[last]` scaled by `scale` (each point's chord point at its arc
+/// length fraction): 0 is the chord, 1 the curve.
+fn scaled_from_chord(curve: &[Vec3], fractions: &[f64], scale: f64) -> Vec<Vec3> {
+    let (a, b) = (curve[0], curve[curve.len() - 1]);
+    curve
+        .iter()
+        .zip(fractions)
+        .map(|(p, &t)| {
+            let on_chord = a + (b - a) * t;
+            on_chord + (p - on_chord) * scale
+        })
+        .collect()
+}
+
+/// The whole rope does not stretch through the hidden runs between two
+/// visible stretches (this project's addition, issue 28): when the rope
+/// is longer than `rest_length`, those runs give up the excess, shared in
+/// proportion to their lengths. A rope pulled out from under an occluder
+/// takes that length from the hidden bend, which tightens.
+///
+/// A run's new curve keeps its anchors and scales its offsets from their
+/// chord by one factor: the polyline's length grows monotonically with it
+/// (a sum of norms of affine functions is convex, and least at the chord,
+/// the shortest path), so a bisection finds it. A run asked for less than
+/// its chord is laid on the chord. An excess under [`MIN_SHORTFALL_SPACINGS`]
+/// node spacings is left (noise), and so is a rope shorter than its rest
+/// length: a polyline of `M` nodes cuts every bend, so falling short is no
+/// evidence that the hidden bend holds more (opening bends to make up the
+/// difference moved them off the rope on the tuning range).
+pub fn conserve_middle_lengths(
+    nodes: &mut [Vec3],
+    known: &[bool],
+    rest_length: f64,
+) -> LengthReport {
+    let mut report = LengthReport::default();
+    let m = nodes.len();
+    if known.len() != m || m < 3 || !(rest_length > 0.0) || !nodes.iter().all(math::is_finite) {
+        return report;
+    }
+    let middle: Vec<HiddenRun> = hidden_runs(known)
+        .into_iter()
+        .filter(|r| r.start > 0 && r.end < m)
+        .collect();
+    let lengths: Vec<f64> = middle
+        .iter()
+        .map(|r| polyline_length(&nodes[r.start - 1..=r.end]))
+        .collect();
+    let hidden: f64 = lengths.iter().sum();
+    if middle.is_empty() || !(hidden > math::LENGTH_EPSILON) {
+        return report;
+    }
+    let budget = rest_length - (polyline_length(nodes) - hidden);
+    let spacing = rest_length / (m - 1) as f64;
+    if hidden - budget < MIN_SHORTFALL_SPACINGS * spacing {
+        return report;
+    }
+    for (run, old) in middle.iter().zip(&lengths) {
+        let target = (budget * old / hidden).max(0.0);
+        let curve = nodes[run.start - 1..=run.end].to_vec();
+        let mut travelled = 0.0;
+        let mut fractions = Vec::with_capacity(curve.len());
+        fractions.push(0.0);
+        for w in curve.windows(2) {
+            travelled += math::norm(&(w[1] - w[0]));
+            fractions.push(travelled / old);
+        }
+        let length_at = |scale: f64| polyline_length(&scaled_from_chord(&curve, &fractions, scale));
+        let (mut lo, mut hi) = (0.0, 1.0);
+        let scale = if target <= length_at(lo) {
+            lo
+        } else {
+            for _ in 0..BISECTION_STEPS {
+                let mid = 0.5 * (lo + hi);
+                if length_at(mid) < target {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            0.5 * (lo + hi)
+        };
+        let placed = scaled_from_chord(&curve, &fractions, scale);
+        if !placed.iter().all(math::is_finite) {
+            continue;
+        }
+        let new = polyline_length(&placed);
+        report.largest_change = report.largest_change.max((new - old).abs() / old);
+        report.runs += 1;
+        nodes[run.start..run.end].copy_from_slice(&placed[1..placed.len() - 1]);
+    }
+    report
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -552,5 +649,84 @@ mod tests {
         let same = [Vec3::new(0.0, 0.0, 0.6); 2];
         let (out, r) = extend_short_ends(&same, 0.1, OpenEnds::BOTH, &|_| true);
         assert_eq!((out.len(), r), (2, ExtensionReport::default()));
+    }
+
+    /// A U of `n` nodes (odd), arms along x `arm` long and `gap` apart,
+    /// with its bend (the middle `bend` nodes) drawn `depth` out to -x.
+    fn hairpin(n: usize, arm: usize, gap: f64, depth: f64) -> Vec<Vec3> {
+        let step = 0.01;
+        (0..n)
+            .map(|i| {
+                if i < arm {
+                    Vec3::new((arm - i) as f64 * step, gap / 2.0, 0.6)
+                } else if i >= n - arm {
+                    Vec3::new((i - (n - arm - 1)) as f64 * step, -gap / 2.0, 0.6)
+                } else {
+                    let t = (i - arm + 1) as f64 / (n - 2 * arm + 1) as f64;
+                    let a = core::f64::consts::PI * t;
+                    Vec3::new(-depth * libm::sin(a), gap / 2.0 * libm::cos(a), 0.6)
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_rope_pulled_out_from_under_an_occluder_tightens_its_hidden_bend() {
+        let mut nodes = hairpin(21, 7, 0.06, 0.04);
+        let known: Vec<bool> = (0..21).map(|i| !(6..15).contains(&i)).collect();
+        let before = nodes.clone();
+        let total = polyline_length(&nodes);
+        // The visible rope leaves 3 cm less for the bend than it holds.
+        let rest = total - 0.03;
+        let r = conserve_middle_lengths(&mut nodes, &known, rest);
+        assert_eq!(r.runs, 1);
+        assert!((polyline_length(&nodes) - rest).abs() < 1e-6);
+        for i in (0..21).filter(|&i| known[i]) {
+            assert_eq!(nodes[i], before[i], "visible node {i} moved");
+        }
+        // Tighter: the apex nearer the anchors' chord (x = 0.01), not flipped.
+        assert!(nodes[10].x > before[10].x && nodes[10].x < 0.01);
+        // Fed under the occluder instead (3 cm more): left as it is.
+        let mut fed = before.clone();
+        assert_eq!(
+            conserve_middle_lengths(&mut fed, &known, total + 0.03).runs,
+            0
+        );
+        assert_eq!(fed, before);
+    }
+
+    #[test]
+    fn a_hidden_bend_asked_for_less_than_its_chord_is_laid_straight() {
+        let before = hairpin(21, 7, 0.06, 0.04);
+        let known: Vec<bool> = (0..21).map(|i| !(6..15).contains(&i)).collect();
+        let mut nodes = before.clone();
+        let r = conserve_middle_lengths(&mut nodes, &known, 0.1);
+        assert_eq!(r.runs, 1);
+        for p in &nodes[6..15] {
+            assert!((p.x - before[5].x).abs() < 1e-12, "{p:?}");
+        }
+    }
+
+    #[test]
+    fn a_middle_run_within_half_a_spacing_of_its_share_or_bad_input_is_left() {
+        let before = hairpin(21, 7, 0.06, 0.04);
+        let known: Vec<bool> = (0..21).map(|i| !(6..15).contains(&i)).collect();
+        let total = polyline_length(&before);
+        let spacing = total / 20.0;
+        for rest in [total - 0.4 * spacing, f64::NAN, -1.0] {
+            let mut nodes = before.clone();
+            assert_eq!(conserve_middle_lengths(&mut nodes, &known, rest).runs, 0);
+            assert_eq!(nodes, before);
+        }
+        let mut nodes = before.clone();
+        nodes[3].x = f64::NAN;
+        assert_eq!(
+            conserve_middle_lengths(&mut nodes, &known, total - 0.03).runs,
+            0
+        );
+        assert_eq!(
+            conserve_middle_lengths(&mut nodes, &known[..5], total).runs,
+            0
+        );
     }
 }

@@ -17,8 +17,8 @@ pub mod slide;
 
 use free_space::{clear_free_space, FreeSpaceReport};
 use length::{
-    conserve_end_lengths, extend_short_ends, resample_with_end_runs_at_rest, ExtensionReport,
-    LengthReport, OpenEnds,
+    conserve_end_lengths, conserve_middle_lengths, extend_short_ends,
+    resample_with_end_runs_at_rest, ExtensionReport, LengthReport, OpenEnds,
 };
 use occlusion::{estimate_hidden_with_sweeps, HiddenMotion, UpeCoefficients, UpeReport};
 use registration::{register_observed, EmReport, EmSettings, MAX_EM_ITERATIONS};
@@ -345,7 +345,14 @@ fn run_step(
         t.estimated = nodes.clone();
     }
     let length = match (input.rest_length, settings.conserve_length) {
-        (Some(l), true) => conserve_end_lengths(&mut nodes, input.visible, l),
+        (Some(l), true) => {
+            let ends = conserve_end_lengths(&mut nodes, input.visible, l);
+            let middle = conserve_middle_lengths(&mut nodes, input.visible, l);
+            LengthReport {
+                runs: ends.runs + middle.runs,
+                largest_change: ends.largest_change.max(middle.largest_change),
+            }
+        }
         _ => LengthReport::default(),
     };
     let free_space = match (&input.evidence, settings.free_space) {
