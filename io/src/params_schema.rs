@@ -263,7 +263,7 @@ pub const PARAMETERS: &[ParamInfo] = &[
         "conserve_length",
         Upetrack,
         "length",
-        "A hidden end run keeps the arc length the rest of the rope leaves",
+        "The rope does not stretch: hidden runs give up what the rope has over its rest length (a hidden end is cut to it, a hidden bend tightens)",
         ParamKind::Bool,
     ),
     p(

@@ -254,7 +254,9 @@ pub fn extend_short_ends(
 /// at the rest spacing `l0 = L0 / (M - 1)`: the `head` hidden nodes at the
 /// start of `nodes` and the `tail` at its end are placed `l0` apart along
 /// their own curve from their anchor (continued straight past their tip
-/// when the curve is short), and only the part between the two anchors is
+/// when the curve is short, as far as `allows` lets a hidden rope go; a
+/// run that does not fit is spread evenly over what there is, closer than
+/// `l0`), and only the part between the two anchors is
 /// spread evenly by `resample`. Spread over the whole rope instead, the
 /// length a rope loses where nothing shows it (a held end inside a
 /// gripper's jaws) would shorten every hidden run by the same share
@@ -268,6 +270,7 @@ pub fn resample_with_end_runs_at_rest(
     count: usize,
     rest_spacing: f64,
     resample: &dyn Fn(&[Vec3], usize) -> Vec<Vec3>,
+    allows: &dyn Fn(&Vec3) -> bool,
 ) -> Option<Vec<Vec3>> {
     let n = nodes.len();
     let ends = head.checked_add(tail)?;
@@ -280,12 +283,40 @@ pub fn resample_with_end_runs_at_rest(
     // Each run's curve from its anchor outwards.
     let mut head_curve = alloc::vec![first];
     head_curve.extend(nodes[..head].iter().rev().copied());
-    out.extend(along(&head_curve, head, rest_spacing).into_iter().rev());
+    out.extend(
+        along_within(&head_curve, head, rest_spacing, allows)
+            .into_iter()
+            .rev(),
+    );
     out.extend_from_slice(&middle);
     let mut tail_curve = alloc::vec![last];
     tail_curve.extend_from_slice(&nodes[n - tail..]);
-    out.extend(along(&tail_curve, tail, rest_spacing));
+    out.extend(along_within(&tail_curve, tail, rest_spacing, allows));
     (out.len() == count && out.iter().all(math::is_finite)).then_some(out)
+}
+
+/// [`along`], but continued past the curve's end only as far as `allows`
+/// (walked in steps of [`EXTENSION_STEP_SPACINGS`] of `step`); when the
+/// curve and that reach are shorter than `count` steps, the points are
+/// spread evenly over what there is.
+fn along_within(
+    curve: &[Vec3],
+    count: usize,
+    step: f64,
+    allows: &dyn Fn(&Vec3) -> bool,
+) -> Vec<Vec3> {
+    let length = polyline_length(curve);
+    let wanted = step * count as f64;
+    if curve.len() < 2 || length >= wanted || count == 0 {
+        return along(curve, count, step);
+    }
+    let n = curve.len();
+    let Some(dir) = outwards(&curve[n - 1], &curve[n - 2]) else {
+        return along(curve, count, step);
+    };
+    let walk = EXTENSION_STEP_SPACINGS * step;
+    let more = reach(&curve[n - 1], &dir, wanted - length, walk, allows);
+    along(curve, count, ((length + more) / count as f64).min(step))
 }
 
 /// Bisection steps of [`conserve_middle_lengths`]: the factor to 2^-30.
@@ -575,7 +606,8 @@ mod tests {
         nodes[3] = Vec3::new(0.021, 0.0, 0.6);
         nodes[8] = Vec3::new(0.09, 0.0, 0.6);
         nodes[9] = Vec3::new(0.11, 0.0, 0.6);
-        let out = resample_with_end_runs_at_rest(&nodes, 2, 2, 10, 0.01, &even).expect("runs");
+        let out =
+            resample_with_end_runs_at_rest(&nodes, 2, 2, 10, 0.01, &even, &|_| true).expect("runs");
         assert_eq!(out.len(), 10);
         // The middle (anchors 2 and 7 kept) spread evenly: 1 cm steps.
         for (i, p) in out.iter().enumerate().take(8).skip(2) {
@@ -600,7 +632,9 @@ mod tests {
     #[test]
     fn end_runs_without_a_middle_to_spread_are_left_to_the_resampler() {
         let nodes = line(6, 0.01);
-        let f = |head, tail| resample_with_end_runs_at_rest(&nodes, head, tail, 6, 0.01, &even);
+        let f = |head, tail| {
+            resample_with_end_runs_at_rest(&nodes, head, tail, 6, 0.01, &even, &|_| true)
+        };
         assert_eq!(f(0, 0), None); // nothing hidden at an end
         assert_eq!(f(3, 2), None); // one node left between the runs
         assert_eq!(f(6, 0), None);
@@ -608,13 +642,13 @@ mod tests {
         assert!(f(2, 2).is_some());
         // Fewer nodes than the runs and a middle need: nothing to spread.
         assert_eq!(
-            resample_with_end_runs_at_rest(&nodes[..3], 1, 1, 6, 0.01, &even),
+            resample_with_end_runs_at_rest(&nodes[..3], 1, 1, 6, 0.01, &even, &|_| true),
             None
         );
         // A rest spacing that is not a positive length.
         for bad in [f64::NAN, 0.0, -0.01, f64::INFINITY] {
             assert_eq!(
-                resample_with_end_runs_at_rest(&nodes, 1, 0, 6, bad, &even),
+                resample_with_end_runs_at_rest(&nodes, 1, 0, 6, bad, &even, &|_| true),
                 None,
                 "{bad}"
             );
@@ -728,5 +762,31 @@ mod tests {
             conserve_middle_lengths(&mut nodes, &known[..5], total).runs,
             0
         );
+    }
+
+    #[test]
+    fn a_hidden_end_short_of_its_curve_stops_where_the_images_forbid_a_rope() {
+        // Eight nodes on a line, the last three hidden but bunched up 5 mm
+        // apart: at the rest spacing (1 cm) the tail goes on straight past
+        // x = 0.06 ...
+        let mut nodes = line(8, 0.01);
+        for (k, i) in (5..8).enumerate() {
+            nodes[i] = Vec3::new(0.045 + 0.005 * k as f64, 0.0, 0.6);
+        }
+        let even = |p: &[Vec3], n: usize| crate::polyline::resample_uniform(p, n);
+        let free =
+            resample_with_end_runs_at_rest(&nodes, 0, 3, 8, 0.01, &even, &|_| true).expect("runs");
+        assert!((free[7].x - 0.07).abs() < 1e-9, "{:?}", free[7]);
+        // ... but not into free space beyond x = 0.062: the three nodes
+        // share what there is.
+        let walled = |p: &Vec3| p.x <= 0.062;
+        let kept =
+            resample_with_end_runs_at_rest(&nodes, 0, 3, 8, 0.01, &even, &walled).expect("runs");
+        assert!(
+            kept[7].x <= 0.062 + 1e-9 && kept[7].x > 0.055,
+            "{:?}",
+            kept[7]
+        );
+        assert!(kept[6].x < kept[7].x && kept[5].x < kept[6].x);
     }
 }

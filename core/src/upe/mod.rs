@@ -64,9 +64,10 @@ pub struct UpeTrackParams {
     /// curve with the rope and moves across it with its anchor; middle
     /// runs use Eq. 6-7), `paper` (Eq. 6-7 everywhere) or `slide` (every run).
     pub hidden_motion: HiddenMotion,
-    /// Give a hidden run at an end of the rope the arc length the rest of
-    /// the rope leaves of its known length (no stretching, no shrinking).
-    /// Default true.
+    /// The rope does not stretch: a hidden run at an end of the rope is no
+    /// longer than the arc length the rest of the rope leaves of its known
+    /// length, and the hidden runs between visible stretches give up what
+    /// the rope has over that length (their bends tighten). Default true.
     pub conserve_length: bool,
     /// Move hidden runs out of free space: where the images show nothing
     /// that could hide them (`perception::evidence`). Default true.
@@ -395,7 +396,13 @@ fn run_step(
         // nodes: no middle to spread, `None`.)
         (Some(l), true) => {
             let spacing = l / m.saturating_sub(1) as f64;
-            resample_with_end_runs_at_rest(&nodes, head, tail, m, spacing, &resample)
+            // Past its estimated curve a hidden end goes on only where a
+            // hidden rope may be: not into free space.
+            let allows = |p: &Vec3| match (&input.evidence, settings.free_space) {
+                (Some(e), true) => e.sight(p).allows_hidden(),
+                _ => true,
+            };
+            resample_with_end_runs_at_rest(&nodes, head, tail, m, spacing, &resample, &allows)
         }
         _ => None,
     };
