@@ -334,7 +334,7 @@ fn log_range(rng: &mut SplitMix64, lo: f64, hi: f64) -> f64 {
 
 /// RGB in [0, 1] from hue (degrees), saturation and value in [0, 1].
 pub(crate) fn hsv_to_rgb(h: f64, s: f64, v: f64) -> [f64; 3] {
-    let h = (h.rem_euclid(360.0)) / 60.0;
+    let h = (h - 360.0 * libm::floor(h / 360.0)) / 60.0;
     let c = v * s;
     let x = c * (1.0 - libm::fabs(h % 2.0 - 1.0));
     let (r, g, b) = match h as u32 {
