@@ -7,11 +7,12 @@ use alloc::vec::Vec;
 use upetrack::math::Vec3;
 use upetrack::rng::SplitMix64;
 
-use crate::layout::{gripper, lift_upper_strand};
+use crate::layout::lift_upper_strand;
 use crate::random::{MotionKind, OccluderKind, RandomScene, ShapeDraw};
 use crate::render::{OccluderBox, RenderSettings};
 use crate::scenario::{
-    rect_over, still, BoxPath, Events, MovingBox, Pull, Scenario, SynthOcclusion, SETTLING_FRAMES,
+    gripper_holding, rect_over, still, BoxPath, Events, MovingBox, Pull, Scenario, SynthOcclusion,
+    GRIPPER_APPROACH_FRAMES, SETTLING_FRAMES,
 };
 
 /// Clear space kept between clutter and the rope, metres.
@@ -161,22 +162,10 @@ fn scenario(mut draw: RandomScene) -> Scenario {
                 });
             }
             let start = pulls[0].start;
-            let approach = start.min(15);
-            draw.occluder.first_frame = start - approach;
+            draw.occluder.first_frame = start - start.min(GRIPPER_APPROACH_FRAMES);
             draw.occluder.last_frame = frames - 1;
             let r = draw.rope.diameter_m * 0.5;
-            for shape in gripper(r, Some(o.rgb)) {
-                boxes.push(MovingBox {
-                    first: start - approach,
-                    last: frames - 1,
-                    shape,
-                    path: BoxPath::Gripper {
-                        pull: 0,
-                        descent: 0.15,
-                        approach,
-                    },
-                });
-            }
+            boxes.extend(gripper_holding(r, Some(o.rgb), start, frames));
         }
     }
 

@@ -18,6 +18,7 @@ use crate::random::RandomScene;
 use crate::render::{hidden_by_boxes, render, rope_hsv, OccluderBox, RenderSettings};
 use crate::rope::{Rope, RopeSettings};
 use crate::variant::Variant;
+use crate::MAX_FRAMES;
 
 /// Frames of physics run before recording starts.
 pub const SETTLING_FRAMES: usize = 45;
@@ -26,7 +27,6 @@ pub const SETTLING_FRAMES: usize = 45;
 /// simulator, the renderer or a scenario changes their frames, so that
 /// cached sequences (`upetrack compare`) are written again.
 pub const SIMULATOR_VERSION: u32 = 2;
-pub use crate::MAX_FRAMES;
 /// Margin added around the projected rope segment that an occlusion hides, pixels.
 const OCCLUSION_MARGIN_PX: f64 = 14.0;
 
@@ -336,6 +336,32 @@ pub struct Scenario {
     camera_path: Option<CameraPath>,
 }
 
+/// Frames a gripper takes to come down onto the end it holds (fewer when
+/// its pull starts sooner).
+pub(crate) const GRIPPER_APPROACH_FRAMES: usize = 15;
+
+/// A gripper's three boxes ([`gripper`]) coming down onto the end that
+/// pull 0 moves from frame `start` on, and holding it to the last frame;
+/// `r` the rope's radius, `color` `None` for the occluders' colour.
+pub(crate) fn gripper_holding(
+    r: f64,
+    color: Option<[f64; 3]>,
+    start: usize,
+    frames: usize,
+) -> impl Iterator<Item = MovingBox> {
+    let approach = start.min(GRIPPER_APPROACH_FRAMES);
+    gripper(r, color).into_iter().map(move |shape| MovingBox {
+        first: start - approach,
+        last: frames - 1,
+        shape,
+        path: BoxPath::Gripper {
+            pull: 0,
+            descent: 0.15,
+            approach,
+        },
+    })
+}
+
 /// A box that stays where it is for the whole scene.
 pub(crate) fn still(shape: OccluderBox, frames: usize) -> MovingBox {
     MovingBox {
@@ -485,21 +511,13 @@ impl Scenario {
                     offset: Vec3::new(-0.05, 0.0, 0.10),
                     circular: true,
                 });
-                let approach = start.min(15);
-                let r = rope.settings.thickness * 0.5;
                 // Palm over the held end, arm up from it, forearm away to +y.
-                for shape in gripper(r, None) {
-                    boxes.push(MovingBox {
-                        first: start - approach,
-                        last: frames - 1,
-                        shape,
-                        path: BoxPath::Gripper {
-                            pull: 0,
-                            descent: 0.15,
-                            approach,
-                        },
-                    });
-                }
+                boxes.extend(gripper_holding(
+                    rope.settings.thickness * 0.5,
+                    None,
+                    start,
+                    frames,
+                ));
             }
             ScenarioKind::BoxOverEnd | ScenarioKind::BoxOverMiddle => {
                 let over_end = kind == ScenarioKind::BoxOverEnd;

@@ -325,16 +325,28 @@ const BISECTION_STEPS: usize = 30;
 /// The points of `curve` with their offsets from the chord `curve[0]` ->
 /// `curve[last]` scaled by `scale` (each point's chord point at its arc
 /// length fraction): 0 is the chord, 1 the curve.
-fn scaled_from_chord(curve: &[Vec3], fractions: &[f64], scale: f64) -> Vec<Vec3> {
+fn scaled_from_chord<'a>(
+    curve: &'a [Vec3],
+    fractions: &'a [f64],
+    scale: f64,
+) -> impl Iterator<Item = Vec3> + 'a {
     let (a, b) = (curve[0], curve[curve.len() - 1]);
-    curve
-        .iter()
-        .zip(fractions)
-        .map(|(p, &t)| {
-            let on_chord = a + (b - a) * t;
-            on_chord + (p - on_chord) * scale
-        })
-        .collect()
+    curve.iter().zip(fractions).map(move |(p, &t)| {
+        let on_chord = a + (b - a) * t;
+        on_chord + (p - on_chord) * scale
+    })
+}
+
+/// Length of the polyline through `points`, without collecting them.
+fn length_of(mut points: impl Iterator<Item = Vec3>) -> f64 {
+    let Some(mut prev) = points.next() else {
+        return 0.0;
+    };
+    points.fold(0.0, |sum, p| {
+        let step = math::norm(&(p - prev));
+        prev = p;
+        sum + step
+    })
 }
 
 /// The whole rope does not stretch through the hidden runs between two
@@ -389,7 +401,8 @@ pub fn conserve_middle_lengths(
             travelled += math::norm(&(w[1] - w[0]));
             fractions.push(travelled / old);
         }
-        let length_at = |scale: f64| polyline_length(&scaled_from_chord(&curve, &fractions, scale));
+        // The bisection measures each trial without allocating it.
+        let length_at = |scale: f64| length_of(scaled_from_chord(&curve, &fractions, scale));
         let (mut lo, mut hi) = (0.0, 1.0);
         let scale = if target <= length_at(lo) {
             lo
@@ -404,7 +417,7 @@ pub fn conserve_middle_lengths(
             }
             0.5 * (lo + hi)
         };
-        let placed = scaled_from_chord(&curve, &fractions, scale);
+        let placed: Vec<Vec3> = scaled_from_chord(&curve, &fractions, scale).collect();
         if !placed.iter().all(math::is_finite) {
             continue;
         }
