@@ -5,7 +5,8 @@
 use serde::{Deserialize, Serialize};
 use upetrack_io::source::{MemorySource, Source};
 use upetrack_io::synthetic::SyntheticWriter;
-use upetrack_synth::scenario::{MAX_FRAMES, MAX_KNOB_SCALE};
+use upetrack_synth::scenario::MAX_KNOB_SCALE;
+use upetrack_synth::MAX_FRAMES;
 use upetrack_synth::{Scenario, ScenarioKind, SceneKnobs, Variant};
 use wasm_bindgen::prelude::*;
 
