@@ -151,6 +151,112 @@ fn round_half_even(v: f32) -> i32 {
 
 /// Undistortion iterations for the Brown-Conrady deprojection.
 pub const UNDISTORT_ITERATIONS: usize = 10;
+/// Largest distance between the depth and the colour camera, metres (a
+/// D435's is 15 mm; rigs of two separate cameras rarely exceed 30 cm).
+pub const MAX_BASELINE_M: f32 = 1.0;
+/// Largest entry of `RᵀR - I` accepted as a rotation (`f32` rounding of a
+/// unit quaternion is under 1e-6).
+pub const ROTATION_TOLERANCE: f32 = 1e-3;
+/// Bytes of the aligner's ray tables (12 per depth pixel and corner): a
+/// 1280x720 depth stream takes 22 MB; 8192x8192 would take 1.6 GB.
+pub const MAX_ALIGN_TABLE_BYTES: usize = 64 << 20;
+/// How many times its nominal size (the ratio of the focal lengths) a depth
+/// pixel may cover in the colour image; a larger footprint can only come
+/// from a calibration that slipped past [`check_calibration`], and is skipped.
+pub const MAX_FOOTPRINT_SCALE: f32 = 4.0;
+/// Points sampled along each border and middle line of an image when
+/// checking that its distortion keeps the rays in order.
+const MONOTONIC_SAMPLES: usize = 64;
+
+/// `true` when `f` is strictly increasing over `MONOTONIC_SAMPLES` steps from `a` to `b`.
+fn increasing(a: f32, b: f32, f: impl Fn(f32) -> f32) -> bool {
+    let mut last = f32::NEG_INFINITY;
+    (0..=MONOTONIC_SAMPLES).all(|i| {
+        let v = f(a + (b - a) * i as f32 / MONOTONIC_SAMPLES as f32);
+        let ok = v.is_finite() && v > last;
+        last = v;
+        ok
+    })
+}
+
+/// An error unless the cameras' calibration is one a real pair can have:
+/// each distortion keeps its image's rays in order (a pixel further right
+/// sees further right, along the borders and the middle lines), the
+/// rotation is a rotation and the baseline at most [`MAX_BASELINE_M`].
+/// Without it a finite but folded distortion can send every depth pixel
+/// across the whole colour image.
+pub fn check_calibration(
+    depth: &Intrinsics,
+    color: &Intrinsics,
+    depth_to_color: &Extrinsics,
+) -> Result<(), RecordingError> {
+    let folded = |what: &str| {
+        RecordingError::message(
+            what,
+            "the distortion folds the image (rays out of order): an implausible calibration",
+        )
+    };
+    // Depth: rays through pixels, in pixel order.
+    let (w, h) = (depth.width as f32, depth.height as f32);
+    for y in [-0.5, h / 2.0, h - 0.5] {
+        if !increasing(-0.5, w - 0.5, |x| depth.deproject([x, y], 1.0)[0]) {
+            return Err(folded("depth"));
+        }
+    }
+    for x in [-0.5, w / 2.0, w - 0.5] {
+        if !increasing(-0.5, h - 0.5, |y| depth.deproject([x, y], 1.0)[1]) {
+            return Err(folded("depth"));
+        }
+    }
+    // Colour: pixels of rays, in ray order, over the rays its image spans.
+    let span = |i: &Intrinsics| {
+        [
+            (-0.5 - i.ppx) / i.fx,
+            (i.width as f32 - 0.5 - i.ppx) / i.fx,
+            (-0.5 - i.ppy) / i.fy,
+            (i.height as f32 - 0.5 - i.ppy) / i.fy,
+        ]
+    };
+    let [x0, x1, y0, y1] = span(color);
+    for y in [y0, (y0 + y1) / 2.0, y1] {
+        if !increasing(x0, x1, |x| color.project_normalised(x, y)[0]) {
+            return Err(folded("colour"));
+        }
+    }
+    for x in [x0, (x0 + x1) / 2.0, x1] {
+        if !increasing(y0, y1, |y| color.project_normalised(x, y)[1]) {
+            return Err(folded("colour"));
+        }
+    }
+    let r = &depth_to_color.rotation;
+    let mut worst = 0.0f32;
+    for a in 0..3 {
+        for b in 0..3 {
+            let dot: f32 = (0..3).map(|k| r[a * 3 + k] * r[b * 3 + k]).sum();
+            let want = if a == b { 1.0 } else { 0.0 };
+            worst = worst.max((dot - want).abs());
+        }
+    }
+    if worst.is_nan() || worst > ROTATION_TOLERANCE {
+        return Err(RecordingError::message(
+            "extrinsics",
+            format!(
+                "the depth-to-colour rotation is not a rotation (RᵀR departs from I by {worst})"
+            ),
+        ));
+    }
+    let t = depth_to_color.translation;
+    let baseline = (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt();
+    if baseline.is_nan() || baseline > MAX_BASELINE_M {
+        return Err(RecordingError::message(
+            "extrinsics",
+            format!(
+                "the depth and colour cameras are {baseline} m apart (at most {MAX_BASELINE_M} m is plausible)"
+            ),
+        ));
+    }
+    Ok(())
+}
 
 /// A rigid transform between two cameras, as `rs2_extrinsics`: `p' = R p + t`,
 /// `rotation` column-major.
@@ -306,7 +412,7 @@ pub fn align_depth_to_color(
     depth_scale: f32,
     arithmetic: AlignArithmetic,
 ) -> Result<Vec<u16>, RecordingError> {
-    Aligner::new(*depth_intr, *color_intr, *depth_to_color, arithmetic).align(depth, depth_scale)
+    Aligner::new(*depth_intr, *color_intr, *depth_to_color, arithmetic)?.align(depth, depth_scale)
 }
 
 /// An alignment set up once for a pair of cameras: the rays through every
@@ -324,18 +430,35 @@ pub struct Aligner {
     top_left: Vec<[f32; 3]>,
     /// The same through each bottom-right corner (empty when not spanned).
     bottom_right: Vec<[f32; 3]>,
+    /// Widest footprint of one depth pixel in the colour image, colour pixels.
+    max_footprint: i32,
 }
 
 impl Aligner {
-    /// The aligner from `depth_intr`'s camera into `color_intr`'s.
+    /// The aligner from `depth_intr`'s camera into `color_intr`'s; an error
+    /// for an implausible calibration ([`check_calibration`]) or tables
+    /// above [`MAX_ALIGN_TABLE_BYTES`].
     pub fn new(
         depth_intr: Intrinsics,
         color_intr: Intrinsics,
         depth_to_color: Extrinsics,
         arithmetic: AlignArithmetic,
-    ) -> Self {
+    ) -> Result<Self, RecordingError> {
+        check_calibration(&depth_intr, &color_intr, &depth_to_color)?;
         let sse = arithmetic == AlignArithmetic::X86Sse;
         let span = !sse || fills_span(&depth_intr, &color_intr);
+        let tables = (depth_intr.width as usize)
+            .saturating_mul(depth_intr.height as usize)
+            .saturating_mul(12 * (1 + usize::from(span)));
+        if tables > MAX_ALIGN_TABLE_BYTES {
+            return Err(RecordingError::TooLarge {
+                what: "alignment tables of the depth stream in bytes",
+                size: tables as u64,
+                max: MAX_ALIGN_TABLE_BYTES as u64,
+            });
+        }
+        let nominal = (color_intr.fx / depth_intr.fx).max(color_intr.fy / depth_intr.fy);
+        let max_footprint = (MAX_FOOTPRINT_SCALE * nominal + 2.0).min(1e6) as i32;
         // The SSE aligner undistorts inverse Brown-Conrady only: a
         // Brown-Conrady depth camera's ray is then taken as undistorted.
         let ray_camera = if sse && depth_intr.model == Distortion::BrownConrady {
@@ -367,7 +490,7 @@ impl Aligner {
         };
         let top_left = map(-0.5);
         let bottom_right = if span { map(0.5) } else { Vec::new() };
-        Self {
+        Ok(Self {
             depth_intr,
             color_intr,
             depth_to_color,
@@ -375,7 +498,8 @@ impl Aligner {
             span,
             top_left,
             bottom_right,
-        }
+            max_footprint,
+        })
     }
 
     /// `true` when this aligner is the one for these cameras and arithmetic.
@@ -432,6 +556,12 @@ impl Aligner {
             } else {
                 (x0, y0)
             };
+            // Work per depth pixel bounded whatever the calibration.
+            if x1.saturating_sub(x0) > self.max_footprint
+                || y1.saturating_sub(y0) > self.max_footprint
+            {
+                continue;
+            }
             let (xs, xe) = (x0.max(0), x1.min(cw - 1));
             if xs > xe {
                 continue;
@@ -592,5 +722,71 @@ mod tests {
             (q[0] - 50.0).abs() < 1e-3 && (q[1] - 10.0).abs() < 1e-3,
             "{q:?}"
         );
+    }
+
+    #[test]
+    fn an_8192_square_depth_stream_is_refused_before_its_tables_are_built() {
+        let big = intr(8192, 8192, 6000.0, 4096.0, 4096.0);
+        let color = intr(640, 480, 600.0, 320.0, 240.0);
+        let e = Aligner::new(big, color, Extrinsics::IDENTITY, AlignArithmetic::Portable)
+            .expect_err("refused");
+        assert!(matches!(e, RecordingError::TooLarge { .. }), "{e}");
+        // A D435's largest depth stream is set up.
+        let hd = intr(1280, 720, 640.0, 640.0, 360.0);
+        assert!(Aligner::new(hd, color, Extrinsics::IDENTITY, AlignArithmetic::Portable).is_ok());
+    }
+
+    #[test]
+    fn a_distortion_that_folds_the_image_is_refused() {
+        let plain = intr(64, 48, 50.0, 32.0, 24.0);
+        let mut folded = plain;
+        // The radial factor 1 + k1 r^2 turns negative inside the image.
+        folded.model = Distortion::ModifiedBrownConrady;
+        folded.coeffs = [-3.0, 0.0, 0.0, 0.0, 0.0];
+        assert!(check_calibration(&plain, &folded, &Extrinsics::IDENTITY).is_err());
+        let mut depth = plain;
+        depth.model = Distortion::InverseBrownConrady;
+        depth.coeffs = [-3.0, 0.0, 0.0, 0.0, 0.0];
+        assert!(check_calibration(&depth, &plain, &Extrinsics::IDENTITY).is_err());
+        // A real lens's mild distortion passes.
+        let mut mild = plain;
+        mild.model = Distortion::BrownConrady;
+        mild.coeffs = [0.1, -0.05, 0.001, -0.002, 0.01];
+        assert!(check_calibration(&mild, &mild, &Extrinsics::IDENTITY).is_ok());
+    }
+
+    #[test]
+    fn a_baseline_of_metres_or_a_skewed_rotation_is_refused() {
+        let i = intr(64, 48, 50.0, 32.0, 24.0);
+        let far = Extrinsics {
+            translation: [2.0, 0.0, 0.0],
+            ..Extrinsics::IDENTITY
+        };
+        assert!(check_calibration(&i, &i, &far).is_err());
+        let mut skew = Extrinsics::IDENTITY;
+        skew.rotation[1] = 0.5;
+        assert!(check_calibration(&i, &i, &skew).is_err());
+        let d435 = Extrinsics::from_quaternion([0.001, -0.002, 0.003, 1.0], [0.015, 0.0, 0.0]);
+        assert!(check_calibration(&i, &i, &d435).is_ok());
+    }
+
+    #[test]
+    fn a_depth_pixel_wider_than_its_footprint_cap_fills_nothing() {
+        let i = intr(8, 6, 10.0, 4.0, 3.0);
+        let depth = vec![1000u16; 48];
+        let mut a =
+            Aligner::new(i, i, Extrinsics::IDENTITY, AlignArithmetic::Portable).expect("plausible");
+        assert!(a
+            .align(&depth, 0.001)
+            .expect("aligned")
+            .iter()
+            .any(|&z| z > 0));
+        // Each pixel spans two corners one colour pixel apart: over a cap of 0.
+        a.max_footprint = 0;
+        assert!(a
+            .align(&depth, 0.001)
+            .expect("aligned")
+            .iter()
+            .all(|&z| z == 0));
     }
 }

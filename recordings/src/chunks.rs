@@ -79,6 +79,67 @@ fn check_size(out: Vec<u8>, size: u64, offset: u64) -> Result<Vec<u8>, Recording
 /// has about 10^5).
 pub const MAX_MESSAGES: usize = 20_000_000;
 
+/// Bytes a scan may decompress per byte of the file. A genuine recording's
+/// chunks inflate 1 to 10 times (depth images of a room compress best); a
+/// chunk of a few KB declaring hundreds of MB is what this stops.
+pub const MAX_EXPANSION: u64 = 64;
+
+/// What a scan may still decompress: [`MAX_EXPANSION`] times the file's
+/// size, and always one chunk of [`MAX_CHUNK_BYTES`].
+pub struct ScanBudget {
+    left: u64,
+    max: u64,
+}
+
+impl ScanBudget {
+    /// The budget of a scan over a file of `len` bytes.
+    pub fn for_file(len: u64) -> Self {
+        let max = len.saturating_mul(MAX_EXPANSION).max(MAX_CHUNK_BYTES);
+        Self { left: max, max }
+    }
+
+    /// Takes `size` bytes about to be decompressed, or refuses them.
+    pub fn spend(&mut self, size: u64) -> Result<(), RecordingError> {
+        self.left = self
+            .left
+            .checked_sub(size)
+            .ok_or(RecordingError::TooLarge {
+                what: "bytes decompressed while scanning",
+                size: self.max - self.left + size,
+                max: self.max,
+            })?;
+        Ok(())
+    }
+}
+
+/// Drops the messages that repeat another's place (`place`: its chunk and
+/// offset), as an index listing one message twice makes, then orders the
+/// rest by `time`.
+pub fn dedup_messages<T, P: Ord, K: Ord>(
+    messages: &mut Vec<T>,
+    place: impl Fn(&T) -> P,
+    time: impl Fn(&T) -> K,
+) {
+    messages.sort_unstable_by_key(&place);
+    messages.dedup_by(|a, b| place(a) == place(b));
+    messages.sort_by_key(time);
+}
+
+/// An index's regions, met in file order, must not overlap: checks that the
+/// region `start..end` begins at or after `*covered` (the end of the ones
+/// before), then moves `*covered` to `end`. With it each byte of an index is
+/// read once, so the messages listed are at most one per index entry's bytes.
+pub fn claim_region(covered: &mut u64, start: u64, end: u64) -> Result<(), RecordingError> {
+    if start < *covered {
+        return Err(RecordingError::corrupt(
+            start,
+            format!("index region overlaps the one before it (which ends at byte {covered})"),
+        ));
+    }
+    *covered = end;
+    Ok(())
+}
+
 /// Adds `m` to a container's message index, refusing the one past [`MAX_MESSAGES`].
 pub fn push_message<T>(messages: &mut Vec<T>, m: T) -> Result<(), RecordingError> {
     push_capped(messages, m, MAX_MESSAGES, "number of messages")
@@ -145,5 +206,33 @@ mod tests {
         c.insert(1, vec![0; 8]);
         c.insert(2, vec![0; 8]);
         assert!(c.get(1).is_some() && c.get(2).is_some() && c.get(3).is_none());
+    }
+
+    #[test]
+    fn a_scan_decompresses_at_most_its_budget() {
+        // A small file may always inflate one chunk of the largest size...
+        let mut b = ScanBudget::for_file(1000);
+        assert!(b.spend(MAX_CHUNK_BYTES).is_ok());
+        assert!(matches!(b.spend(1), Err(RecordingError::TooLarge { .. })));
+        // ...a large one MAX_EXPANSION times its size.
+        let len = 100 * MAX_CHUNK_BYTES;
+        let mut b = ScanBudget::for_file(len);
+        assert!(b.spend(len * MAX_EXPANSION).is_ok());
+        assert!(b.spend(1).is_err());
+    }
+
+    #[test]
+    fn index_regions_may_touch_but_not_overlap() {
+        let mut covered = 0;
+        assert!(claim_region(&mut covered, 10, 20).is_ok());
+        assert!(claim_region(&mut covered, 20, 30).is_ok());
+        assert!(claim_region(&mut covered, 29, 40).is_err());
+    }
+
+    #[test]
+    fn a_message_listed_twice_is_kept_once_in_time_order() {
+        let mut m = vec![(5u64, 1u32, 10u64), (3, 0, 4), (5, 1, 10), (1, 2, 0)];
+        dedup_messages(&mut m, |x| (x.1, x.2), |x| x.0);
+        assert_eq!(m, [(1, 2, 0), (3, 0, 4), (5, 1, 10)]);
     }
 }

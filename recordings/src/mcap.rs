@@ -10,7 +10,9 @@
 use std::collections::BTreeMap;
 
 use crate::bytes::{ByteSource, Cursor};
-use crate::chunks::{decompress, push_message, ChunkCache, MAX_CHUNK_BYTES};
+use crate::chunks::{
+    claim_region, decompress, dedup_messages, push_message, ChunkCache, ScanBudget, MAX_CHUNK_BYTES,
+};
 use crate::error::RecordingError;
 
 /// The first and last 8 bytes of every MCAP file.
@@ -220,7 +222,11 @@ impl<R: ByteSource> Mcap<R> {
                 },
             );
         }
-        m.messages.sort_by_key(|r| (r.time_ns, r.chunk, r.offset));
+        dedup_messages(
+            &mut m.messages,
+            |r| (r.chunk, r.offset),
+            |r| (r.time_ns, r.chunk, r.offset),
+        );
         Ok(m)
     }
 
@@ -295,13 +301,14 @@ impl<R: ByteSource> Mcap<R> {
             }
             pos = next;
         }
+        // A chunk indexed twice is read once; chunks and their message
+        // indexes must then follow one another without overlapping.
         chunk_indexes.sort_unstable();
+        chunk_indexes.dedup_by_key(|c| c.0);
+        let mut covered = 0u64;
         for (chunk_at, chunk_len, index_len, plain) in chunk_indexes {
             let chunk = self.chunks.len() as u32;
             self.chunks.push(ChunkPlace { pos: chunk_at });
-            // An uncompressed chunk's records start after its 40-byte header:
-            // its messages are read where they lie, without the whole chunk.
-            let in_file = |offset: u64| chunk_at + 9 + PLAIN_CHUNK_HEADER + offset;
             if index_len > MAX_RECORD_BYTES {
                 return Err(RecordingError::TooLarge {
                     what: "MCAP message index in bytes",
@@ -313,6 +320,18 @@ impl<R: ByteSource> Mcap<R> {
                 .checked_add(chunk_len)
                 .ok_or_else(|| RecordingError::corrupt(chunk_at, "chunk length overflows"))?;
             crate::bytes::check_range(self.src.len(), at, index_len as usize)?;
+            claim_region(&mut covered, chunk_at, at)?;
+            claim_region(&mut covered, at, at + index_len)?;
+            // An uncompressed chunk's records start after its 40-byte header:
+            // its messages are read where they lie, without the whole chunk.
+            let in_file = |offset: u64| {
+                (chunk_at + 9 + PLAIN_CHUNK_HEADER)
+                    .checked_add(offset)
+                    .filter(|&p| p < at)
+                    .ok_or_else(|| {
+                        RecordingError::corrupt(chunk_at, "message index points past its chunk")
+                    })
+            };
             let mut bytes = vec![0u8; index_len as usize];
             self.src.read_at(at, &mut bytes)?;
             for r in records(&bytes, at) {
@@ -333,7 +352,7 @@ impl<R: ByteSource> Mcap<R> {
                     let time_ns = c.u64("index time")?;
                     let offset = c.u64("index offset")?;
                     let (chunk, offset) = if plain {
-                        (u32::MAX, in_file(offset))
+                        (u32::MAX, in_file(offset)?)
                     } else {
                         (chunk, offset)
                     };
@@ -360,6 +379,7 @@ impl<R: ByteSource> Mcap<R> {
     ) -> Result<(), RecordingError> {
         let mut pos = MAGIC.len() as u64;
         let end = self.src.len();
+        let mut budget = ScanBudget::for_file(end);
         while pos + 9 <= end {
             let step = (|| -> Result<Option<u64>, RecordingError> {
                 let (op, len, body_at) = record_head(&mut self.src, pos)?;
@@ -395,6 +415,7 @@ impl<R: ByteSource> Mcap<R> {
                     OP_CHUNK => {
                         let (_, body, _) = read_record(&mut self.src, pos, MAX_CHUNK_BYTES)?;
                         let (compression, size, data) = chunk_parts(&body, body_at)?;
+                        budget.spend(size)?;
                         let inner = decompress(&compression, size, data, pos)?;
                         let chunk = self.chunks.len() as u32;
                         let mut found = Vec::new();

@@ -345,6 +345,12 @@ impl<R: ByteSource> Recording<R> {
             Wire::Ros1 => AlignArithmetic::X86Sse,
             Wire::Cdr => AlignArithmetic::Portable,
         });
+        // Set up at once, so an implausible calibration or a depth stream too
+        // large to align is refused when the file is opened.
+        let aligner = match depth_to_color {
+            Some(ex) => Some(Aligner::new(depth.intrinsics, color.intrinsics, ex, align)?),
+            None => None,
+        };
         Ok(Self {
             store,
             layout,
@@ -360,7 +366,7 @@ impl<R: ByteSource> Recording<R> {
             color_msgs,
             depth_msgs,
             start_ns,
-            aligner: None,
+            aligner,
         })
     }
 
@@ -582,7 +588,7 @@ impl<R: ByteSource> Recording<R> {
                     .as_ref()
                     .is_none_or(|a| !a.is_for(&d, &c, &ex, arithmetic));
                 if stale {
-                    self.aligner = Some(Aligner::new(d, c, ex, arithmetic));
+                    self.aligner = Some(Aligner::new(d, c, ex, arithmetic)?);
                 }
                 match &self.aligner {
                     Some(a) => a.align(&depth, self.depth_units as f32)?,

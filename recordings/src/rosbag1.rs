@@ -8,7 +8,9 @@
 use std::collections::BTreeMap;
 
 use crate::bytes::{ByteSource, Cursor};
-use crate::chunks::{decompress, push_message, ChunkCache};
+use crate::chunks::{
+    claim_region, decompress, dedup_messages, push_message, ChunkCache, ScanBudget,
+};
 use crate::error::RecordingError;
 
 /// The first bytes of every ROS1 bag 2.0.
@@ -210,14 +212,16 @@ fn connection_from(rec_header: &[u8], data: &[u8], at: u64) -> Result<Connection
 /// Reads and decompresses the chunk whose record starts at `pos`.
 fn load_chunk<R: ByteSource>(src: &mut R, pos: u64) -> Result<Vec<u8>, RecordingError> {
     let rec = read_record(src, pos)?;
-    chunk_data(src, &rec, pos)
+    chunk_data(src, &rec, pos, None)
 }
 
-/// The uncompressed data of chunk record `rec` (at `pos`), its header already read.
+/// The uncompressed data of chunk record `rec` (at `pos`), its header
+/// already read; a scan pays its declared size from `budget` first.
 fn chunk_data<R: ByteSource>(
     src: &mut R,
     rec: &Record,
     pos: u64,
+    budget: Option<&mut ScanBudget>,
 ) -> Result<Vec<u8>, RecordingError> {
     let f = fields(&rec.header, rec.header_pos)?;
     if op(&f, pos)? != OP_CHUNK {
@@ -231,6 +235,9 @@ fn chunk_data<R: ByteSource>(
             size: u64::from(rec.data_len),
             max: u64::from(MAX_CHUNK_DATA_BYTES),
         });
+    }
+    if let Some(budget) = budget {
+        budget.spend(u64::from(size))?;
     }
     let data = read_data(src, rec)?;
     decompress(&compression, u64::from(size), &data, pos)
@@ -307,7 +314,11 @@ impl<R: ByteSource> Bag<R> {
             );
             bag.scan(head.end())?;
         }
-        bag.messages.sort_by_key(|m| (m.time_ns, m.chunk, m.offset));
+        dedup_messages(
+            &mut bag.messages,
+            |m| (m.chunk, m.offset),
+            |m| (m.time_ns, m.chunk, m.offset),
+        );
         Ok(bag)
     }
 
@@ -349,7 +360,10 @@ impl<R: ByteSource> Bag<R> {
             }
             pos = rec.end();
         }
+        // A chunk listed twice is read once.
         chunk_infos.sort_unstable();
+        chunk_infos.dedup_by_key(|(pos, _)| *pos);
+        let mut covered = 0u64;
         for (chunk_pos, count) in chunk_infos {
             let chunk = read_record(&mut self.src, chunk_pos)?;
             let chunk_index = self.chunks.len() as u32;
@@ -358,8 +372,10 @@ impl<R: ByteSource> Bag<R> {
                 plain_data: plain_data(&chunk)?,
             });
             let mut at = chunk.end();
+            claim_region(&mut covered, chunk_pos, at)?;
             for _ in 0..count {
                 let rec = read_record(&mut self.src, at)?;
+                claim_region(&mut covered, at, rec.end())?;
                 let f = fields(&rec.header, rec.header_pos)?;
                 if op(&f, at)? != OP_INDEX {
                     return Err(RecordingError::corrupt(
@@ -403,8 +419,9 @@ impl<R: ByteSource> Bag<R> {
         self.messages.clear();
         self.chunks.clear();
         let mut pos = start;
+        let mut budget = ScanBudget::for_file(self.src.len());
         while pos < self.src.len() {
-            match self.scan_record(pos) {
+            match self.scan_record(pos, &mut budget) {
                 Ok(next) => pos = next,
                 Err(e @ RecordingError::TooLarge { .. }) => return Err(e),
                 Err(e) => {
@@ -417,13 +434,13 @@ impl<R: ByteSource> Bag<R> {
         Ok(())
     }
 
-    fn scan_record(&mut self, pos: u64) -> Result<u64, RecordingError> {
+    fn scan_record(&mut self, pos: u64, budget: &mut ScanBudget) -> Result<u64, RecordingError> {
         let rec = read_record(&mut self.src, pos)?;
         let f = fields(&rec.header, rec.header_pos)?;
         match op(&f, pos)? {
             OP_CONNECTION => self.add_connection_record(&rec, pos)?,
             OP_CHUNK => {
-                let chunk = chunk_data(&mut self.src, &rec, pos)?;
+                let chunk = chunk_data(&mut self.src, &rec, pos, Some(budget))?;
                 let chunk_index = self.chunks.len() as u32;
                 let (mut connections, mut messages) = (Vec::new(), Vec::new());
                 for r in chunk_records(&chunk, 0) {

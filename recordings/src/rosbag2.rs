@@ -6,12 +6,17 @@
 //! each blob is read when its message is.
 
 use crate::bytes::ByteSource;
-use crate::error::RecordingError;
+use crate::chunks::push_message;
+use crate::error::{push_capped, RecordingError};
 use crate::sqlite::{column_names, Database, RowRef, Value};
 
 /// The first bytes of a zstd frame: a message compressed by rosbag2's
 /// `--compression-mode message`.
 const ZSTD_MAGIC: [u8; 4] = [0x28, 0xb5, 0x2f, 0xfd];
+/// Most topics in one database.
+pub const MAX_TOPICS: usize = 65_536;
+/// Longest topic name, type or serialisation format read, bytes.
+pub const MAX_TOPIC_TEXT_BYTES: u64 = 64 << 10;
 /// Largest decompressed message, bytes.
 pub const MAX_MESSAGE_BYTES: u64 = 256 << 20;
 
@@ -95,29 +100,32 @@ impl<R: ByteSource> Rosbag2<R> {
             column(&tcols, "type", "topics")?,
             column(&tcols, "serialization_format", "topics")?,
         );
-        let mut topics = Vec::new();
-        for row in db.rows(topics_root)? {
+        let mut topics: Vec<Topic> = Vec::new();
+        db.for_each_row(topics_root, |db, row| {
             let v = &row.values;
             let bad = || RecordingError::corrupt(0, "a `topics` row of the wrong shape");
             let id = int(v.get(t_id), row.at.rowid).ok_or_else(bad)?;
-            let text = |db: &mut Database<R>, i: usize| match v.get(i) {
-                Some(val) => db.text(row.at, val),
+            let mut text = |i: usize| match v.get(i) {
+                Some(val) => db.text(row.at, val, MAX_TOPIC_TEXT_BYTES),
                 None => Err(bad()),
             };
-            topics.push(Topic {
+            let topic = Topic {
                 id,
-                name: text(&mut db, t_name)?,
-                msg_type: text(&mut db, t_type)?,
-                serialization: text(&mut db, t_ser)?,
-            });
-        }
+                name: text(t_name)?,
+                msg_type: text(t_type)?,
+                serialization: text(t_ser)?,
+            };
+            push_capped(&mut topics, topic, MAX_TOPICS, "number of topics")
+        })?;
         let (m_topic, m_time, m_data) = (
             column(&mcols, "topic_id", "messages")?,
             column(&mcols, "timestamp", "messages")?,
             column(&mcols, "data", "messages")?,
         );
+        // Listed row by row, keeping only where each blob is: a row's other
+        // values are never held, so memory is a few words per message.
         let mut messages = Vec::new();
-        for row in db.rows(messages_root)? {
+        db.for_each_row(messages_root, |_, row| {
             let v = &row.values;
             let (Some(topic), Some(time), Some(Value::Bytes { offset, len, .. })) = (
                 int(v.get(m_topic), row.at.rowid),
@@ -129,16 +137,19 @@ impl<R: ByteSource> Rosbag2<R> {
                     "a `messages` row of the wrong shape",
                 ));
             };
-            messages.push(Message {
-                topic,
-                time_ns: time.max(0) as u64,
-                blob: BlobRef {
-                    row: row.at,
-                    offset: *offset,
-                    len: *len,
+            push_message(
+                &mut messages,
+                Message {
+                    topic,
+                    time_ns: time.max(0) as u64,
+                    blob: BlobRef {
+                        row: row.at,
+                        offset: *offset,
+                        len: *len,
+                    },
                 },
-            });
-        }
+            )
+        })?;
         messages.sort_by_key(|m| (m.time_ns, m.blob.row.rowid));
         Ok(Self {
             db,

@@ -6,16 +6,39 @@
 //! read when that row's value is asked for.
 
 use crate::bytes::ByteSource;
-use crate::error::{push_capped, RecordingError};
+use crate::error::RecordingError;
 
 /// The first 16 bytes of every SQLite 3 database.
 pub const MAGIC: &[u8] = b"SQLite format 3\0";
 /// Deepest table B-tree followed (real ones are 3 to 5 levels deep).
 pub const MAX_TREE_DEPTH: usize = 32;
-/// Most rows listed from one table.
-pub const MAX_ROWS: usize = 20_000_000;
 /// Largest value read from a row, bytes.
 pub const MAX_VALUE_BYTES: u64 = 256 << 20;
+/// Most rows in the schema table (a rosbag2 database has 3 to 6 tables).
+pub const MAX_SCHEMA_ROWS: usize = 4096;
+/// Longest text read from the schema (a table's name or `CREATE` statement), bytes.
+pub const MAX_SCHEMA_TEXT_BYTES: u64 = 64 << 10;
+
+/// Pages seen in one traversal, one bit each (a 4 GB file of 4 KB pages: 128 KB).
+struct PageSet(Vec<u64>);
+
+impl PageSet {
+    fn new(pages: u32) -> Self {
+        Self(vec![0; pages as usize / 64 + 1])
+    }
+
+    /// Marks page `n`; `false` when it was marked already.
+    fn insert(&mut self, n: u32) -> bool {
+        let (word, bit) = (n as usize / 64, 1u64 << (n % 64));
+        match self.0.get_mut(word) {
+            Some(w) if *w & bit == 0 => {
+                *w |= bit;
+                true
+            }
+            _ => false,
+        }
+    }
+}
 
 /// `true` when `head` starts like a SQLite 3 database.
 pub fn is_sqlite(head: &[u8]) -> bool {
@@ -170,21 +193,35 @@ impl<R: ByteSource> Database<R> {
         }
     }
 
-    /// Every row of the table whose B-tree root is `root`, in rowid order;
-    /// rows past [`MAX_ROWS`] are an error.
-    pub fn rows(&mut self, root: u32) -> Result<Vec<Row>, RecordingError> {
-        let mut out = Vec::new();
+    /// Calls `each` with every row of the table whose B-tree root is `root`,
+    /// in rowid order. The traversal is bounded by the file: a page reached
+    /// twice (a loop, or two parents sharing a child) and rowids out of order
+    /// (a cell listed twice) are errors, so no page is read twice and at most
+    /// one row is listed per two bytes of leaf page.
+    pub fn for_each_row(
+        &mut self,
+        root: u32,
+        mut each: impl FnMut(&mut Self, Row) -> Result<(), RecordingError>,
+    ) -> Result<(), RecordingError> {
+        let mut visited = PageSet::new(self.pages);
+        let mut last_rowid: Option<i64> = None;
         // Depth-first, children in key order: a stack of (page, depth).
         let mut stack = vec![(root, 0usize)];
         while let Some((n, depth)) = stack.pop() {
             if depth > MAX_TREE_DEPTH {
                 return Err(RecordingError::corrupt(
                     self.page_offset(n),
-                    "table B-tree deeper than any real one (a loop?)",
+                    "table B-tree deeper than any real one",
                 ));
             }
             let page = self.page(n)?;
             let base = self.page_offset(n);
+            if !visited.insert(n) {
+                return Err(RecordingError::corrupt(
+                    base,
+                    format!("page {n} is reached twice in the B-tree of root page {root} (a loop or a shared page)"),
+                ));
+            }
             let h = if n == 1 { 100 } else { 0 };
             let kind = page[h];
             let cells = be16(&page[h + 3..h + 5]) as usize;
@@ -210,9 +247,19 @@ impl<R: ByteSource> Database<R> {
                 }
                 0x0d => {
                     for i in 0..cells {
-                        let c = cell_at(i);
-                        let row = self.leaf_row(&page, n, c)?;
-                        push_capped(&mut out, row, MAX_ROWS, "rows in one table")?;
+                        let row = self.leaf_row(&page, n, cell_at(i))?;
+                        if last_rowid.is_some_and(|last| row.at.rowid <= last) {
+                            return Err(RecordingError::corrupt(
+                                base,
+                                format!(
+                                    "rowid {} follows rowid {} (a cell listed twice?)",
+                                    row.at.rowid,
+                                    last_rowid.unwrap_or_default()
+                                ),
+                            ));
+                        }
+                        last_rowid = Some(row.at.rowid);
+                        each(self, row)?;
                     }
                 }
                 other => {
@@ -223,7 +270,7 @@ impl<R: ByteSource> Database<R> {
                 }
             }
         }
-        Ok(out)
+        Ok(())
     }
 
     /// The row of the leaf cell at offset `c` of `page` (number `n`).
@@ -321,10 +368,17 @@ impl<R: ByteSource> Database<R> {
         Ok(out)
     }
 
-    /// The text of value `v` of row `at`.
-    pub fn text(&mut self, at: RowRef, v: &Value) -> Result<String, RecordingError> {
+    /// The text of value `v` of row `at`, refused when longer than `max` bytes.
+    pub fn text(&mut self, at: RowRef, v: &Value, max: u64) -> Result<String, RecordingError> {
         match v {
             Value::Bytes { offset, len, .. } => {
+                if *len > max {
+                    return Err(RecordingError::TooLarge {
+                        what: "text value in bytes",
+                        size: *len,
+                        max,
+                    });
+                }
                 let b = self.payload(at, *offset, *len)?;
                 String::from_utf8(b).map_err(|_| {
                     RecordingError::corrupt(self.page_offset(at.page), "text is not UTF-8")
@@ -337,20 +391,33 @@ impl<R: ByteSource> Database<R> {
     }
 
     /// The tables of the schema: name, root page and `CREATE TABLE` text.
+    /// At most [`MAX_SCHEMA_ROWS`] rows, each text at most [`MAX_SCHEMA_TEXT_BYTES`].
     pub fn tables(&mut self) -> Result<Vec<(String, u32, String)>, RecordingError> {
         let mut out = Vec::new();
-        for row in self.rows(1)? {
-            let [kind, name, _, root, sql] = row.values.as_slice() else {
-                continue;
-            };
-            if self.text(row.at, kind)? != "table" {
-                continue;
+        let mut seen = 0usize;
+        self.for_each_row(1, |db, row| {
+            seen += 1;
+            if seen > MAX_SCHEMA_ROWS {
+                return Err(RecordingError::TooLarge {
+                    what: "rows in the schema",
+                    size: seen as u64,
+                    max: MAX_SCHEMA_ROWS as u64,
+                });
             }
-            let Value::Int(root) = root else { continue };
-            let name = self.text(row.at, name)?;
-            let sql = self.text(row.at, sql)?;
-            out.push((name, *root as u32, sql));
-        }
+            let [kind, name, _, root, sql] = row.values.as_slice() else {
+                return Ok(());
+            };
+            if db.text(row.at, kind, MAX_SCHEMA_TEXT_BYTES)? != "table" {
+                return Ok(());
+            }
+            let Value::Int(root) = root else {
+                return Ok(());
+            };
+            let name = db.text(row.at, name, MAX_SCHEMA_TEXT_BYTES)?;
+            let sql = db.text(row.at, sql, MAX_SCHEMA_TEXT_BYTES)?;
+            out.push((name, u32::try_from(*root).unwrap_or(0), sql));
+            Ok(())
+        })?;
         Ok(out)
     }
 }
@@ -382,12 +449,13 @@ fn record_values(local: &[u8], total: u64, at: u64) -> Result<Vec<Value>, Record
             10 | 11 => return Err(RecordingError::corrupt(at, "reserved serial type")),
             n => (n - 12) / 2,
         };
-        if offset + size > total {
-            return Err(RecordingError::corrupt(at, "record value past its payload"));
-        }
+        let value_end = offset
+            .checked_add(size)
+            .filter(|&e| e <= total)
+            .ok_or_else(|| RecordingError::corrupt(at, "record value past its payload"))?;
         let int = |local: &[u8]| -> Result<i64, RecordingError> {
             let b = local
-                .get(offset as usize..(offset + size) as usize)
+                .get(offset as usize..value_end as usize)
                 .ok_or_else(|| RecordingError::corrupt(at, "integer past the on-page payload"))?;
             let mut v: i64 = if b.first().is_some_and(|&x| x & 0x80 != 0) {
                 -1
@@ -411,7 +479,7 @@ fn record_values(local: &[u8], total: u64, at: u64) -> Result<Vec<Value>, Record
                 text: n % 2 == 1,
             },
         });
-        offset += size;
+        offset = value_end;
     }
     Ok(out)
 }

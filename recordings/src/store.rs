@@ -92,8 +92,9 @@ impl<R: ByteSource> Store<R> {
         let n = head.len().min(src.len() as usize);
         src.read_at(0, &mut head[..n])?;
         let mut topics = Vec::new();
+        // Each container's own list is moved into the store's, never held twice.
         if mcap::is_mcap(&head[..n]) {
-            let m = Mcap::open(src)?;
+            let mut m = Mcap::open(src)?;
             let mut wire = None;
             for c in m.channels.values() {
                 let w = match c.encoding.as_str() {
@@ -122,9 +123,9 @@ impl<R: ByteSource> Store<R> {
                 .collect();
             let messages = listed(
                 &ids,
-                m.messages
-                    .iter()
-                    .map(|r| (r.channel, r.time_ns, At::Mcap(*r))),
+                std::mem::take(&mut m.messages)
+                    .into_iter()
+                    .map(|r| (r.channel, r.time_ns, At::Mcap(r))),
             );
             return Ok(Self {
                 inner: Inner::Mcap(m),
@@ -134,7 +135,7 @@ impl<R: ByteSource> Store<R> {
             });
         }
         if sqlite::is_sqlite(&head[..n]) {
-            let db = Rosbag2::open(src)?;
+            let mut db = Rosbag2::open(src)?;
             if let Some(t) = db.topics.iter().find(|t| t.serialization != "cdr") {
                 return Err(RecordingError::UnknownFormat {
                     reason: format!(
@@ -150,7 +151,9 @@ impl<R: ByteSource> Store<R> {
                 .collect();
             let messages = listed(
                 &ids,
-                db.messages.iter().map(|m| (m.topic, m.time_ns, At::Db(*m))),
+                std::mem::take(&mut db.messages)
+                    .into_iter()
+                    .map(|m| (m.topic, m.time_ns, At::Db(m))),
             );
             return Ok(Self {
                 inner: Inner::Db(db),
@@ -159,7 +162,7 @@ impl<R: ByteSource> Store<R> {
                 wire: Wire::Cdr,
             });
         }
-        let bag = Bag::open(src)?;
+        let mut bag = Bag::open(src)?;
         let ids: BTreeMap<u32, usize> = bag
             .connections
             .values()
@@ -167,9 +170,9 @@ impl<R: ByteSource> Store<R> {
             .collect();
         let messages = listed(
             &ids,
-            bag.messages
-                .iter()
-                .map(|m| (m.conn, m.time_ns, At::Bag(*m))),
+            std::mem::take(&mut bag.messages)
+                .into_iter()
+                .map(|m| (m.conn, m.time_ns, At::Bag(m))),
         );
         Ok(Self {
             inner: Inner::Bag(bag),

@@ -1,0 +1,213 @@
+//! Hostile files made from the genuine recordings of `tests/recordings`: a
+//! few bytes of pages or index records changed or added so that a reader
+//! trusting the file's structure would list the same data many times over.
+//! Each test failed on the readers before they were bounded by the file.
+
+use std::path::{Path, PathBuf};
+
+use upetrack_recordings::store::Store;
+use upetrack_recordings::RecordingError;
+
+fn fixture(name: &str) -> Vec<u8> {
+    let path: PathBuf = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../tests/recordings")
+        .join(name);
+    std::fs::read(path).expect("fixture exists")
+}
+
+fn be16(b: &[u8]) -> usize {
+    usize::from(b[0]) << 8 | usize::from(b[1])
+}
+
+/// SQLite page `n` (1-based) of `db`, as a byte range.
+fn page_range(db: &[u8], n: usize) -> std::ops::Range<usize> {
+    let size = be16(&db[16..18]);
+    (n - 1) * size..n * size
+}
+
+/// The `messages` table's root page of `librealsense.db3` (page 3: an
+/// interior page over 15 leaves) and the page numbers of its children.
+fn messages_root(db: &[u8]) -> (usize, Vec<usize>) {
+    let root = 3;
+    let p = &db[page_range(db, root)];
+    assert_eq!(
+        p[0], 0x05,
+        "the fixture's messages root is an interior page"
+    );
+    let cells = be16(&p[3..5]);
+    let mut children: Vec<usize> = (0..cells)
+        .map(|i| {
+            let c = be16(&p[12 + 2 * i..]);
+            u32::from_be_bytes([p[c], p[c + 1], p[c + 2], p[c + 3]]) as usize
+        })
+        .collect();
+    children.push(u32::from_be_bytes([p[8], p[9], p[10], p[11]]) as usize);
+    (root, children)
+}
+
+fn corrupt_text(e: Result<Store<Vec<u8>>, RecordingError>) -> String {
+    match e {
+        Err(e @ RecordingError::Corrupt { .. }) => e.to_string(),
+        Err(e) => panic!("another error: {e}"),
+        Ok(s) => panic!("opened, with {} messages", s.messages.len()),
+    }
+}
+
+#[test]
+fn sqlite_btree_whose_parents_share_a_leaf_is_refused_not_listed_again() {
+    let mut db = fixture("librealsense.db3");
+    let (root, children) = messages_root(&db);
+    // Every child pointer of the root made the first leaf.
+    let first = (children[0] as u32).to_be_bytes();
+    let range = page_range(&db, root);
+    let p = &mut db[range];
+    let cells = be16(&p[3..5]);
+    for i in 0..cells {
+        let c = be16(&p[12 + 2 * i..]);
+        p[c..c + 4].copy_from_slice(&first);
+    }
+    p[8..12].copy_from_slice(&first);
+    let text = corrupt_text(Store::open(db));
+    assert!(text.contains("reached twice"), "{text}");
+}
+
+#[test]
+fn sqlite_leaf_listing_one_cell_twice_is_refused() {
+    let mut db = fixture("librealsense.db3");
+    let (_, children) = messages_root(&db);
+    let range = page_range(&db, children[0]);
+    let p = &mut db[range];
+    assert_eq!(p[0], 0x0d);
+    assert!(be16(&p[3..5]) >= 2);
+    // The second cell pointer made the first's.
+    let (a, b) = (p[8], p[9]);
+    p[10] = a;
+    p[11] = b;
+    let text = corrupt_text(Store::open(db));
+    assert!(text.contains("rowid"), "{text}");
+}
+
+/// The ROS1 bag records from `pos` to the end: (start, end, op).
+fn bag_records(bag: &[u8], mut pos: usize) -> Vec<(usize, usize, u8)> {
+    let u32_at = |p: usize| u32::from_le_bytes([bag[p], bag[p + 1], bag[p + 2], bag[p + 3]]);
+    let mut out = Vec::new();
+    while pos < bag.len() {
+        let header_len = u32_at(pos) as usize;
+        let header = &bag[pos + 4..pos + 4 + header_len];
+        let data_len = u32_at(pos + 4 + header_len) as usize;
+        let end = pos + 8 + header_len + data_len;
+        let mut op = 0;
+        let mut h = 0;
+        while h < header.len() {
+            let n = u32::from_le_bytes([header[h], header[h + 1], header[h + 2], header[h + 3]])
+                as usize;
+            let field = &header[h + 4..h + 4 + n];
+            if let Some(v) = field.strip_prefix(b"op=") {
+                op = v[0];
+            }
+            h += 4 + n;
+        }
+        out.push((pos, end, op));
+        pos = end;
+    }
+    out
+}
+
+#[test]
+fn bag_index_listing_its_chunks_many_times_lists_each_message_once() {
+    let genuine = fixture("ros_lz4.bag");
+    let expected = Store::open(genuine.clone())
+        .expect("genuine")
+        .messages
+        .len();
+    // The index section (connections and chunk infos) is the file's tail:
+    // its chunk-info records are appended again, a hundred times.
+    let records = bag_records(&genuine, 13);
+    let infos: Vec<u8> = records
+        .iter()
+        .filter(|r| r.2 == 0x06)
+        .flat_map(|r| genuine[r.0..r.1].iter().copied())
+        .collect();
+    assert!(!infos.is_empty());
+    let mut bag = genuine.clone();
+    for _ in 0..100 {
+        bag.extend_from_slice(&infos);
+    }
+    let store = Store::open(bag).expect("a repeated chunk info is read once");
+    assert!(store.warnings().is_empty(), "{:?}", store.warnings());
+    assert_eq!(store.messages.len(), expected);
+}
+
+#[test]
+fn mcap_summary_listing_its_chunks_many_times_lists_each_message_once() {
+    let genuine = fixture("ros2_png.mcap");
+    let expected = Store::open(genuine.clone())
+        .expect("genuine")
+        .messages
+        .len();
+    let u64_at = |p: usize| {
+        let mut b = [0u8; 8];
+        b.copy_from_slice(&genuine[p..p + 8]);
+        u64::from_le_bytes(b) as usize
+    };
+    // Footer: opcode, length, summary start, ...; then the closing magic.
+    let footer_at = genuine.len() - 8 - 29;
+    assert_eq!(genuine[footer_at], 0x02);
+    let mut pos = u64_at(footer_at + 9);
+    let mut indexes = Vec::new();
+    while pos < footer_at {
+        let end = pos + 9 + u64_at(pos + 1);
+        if genuine[pos] == 0x08 {
+            indexes.extend_from_slice(&genuine[pos..end]);
+        }
+        pos = end;
+    }
+    assert!(!indexes.is_empty());
+    // The chunk indexes repeated a hundred times just before the footer.
+    let mut mcap = genuine[..footer_at].to_vec();
+    for _ in 0..100 {
+        mcap.extend_from_slice(&indexes);
+    }
+    mcap.extend_from_slice(&genuine[footer_at..]);
+    let store = Store::open(mcap).expect("a repeated chunk index is read once");
+    assert!(store.warnings().is_empty(), "{:?}", store.warnings());
+    assert_eq!(store.messages.len(), expected);
+}
+
+#[test]
+fn mcap_chunk_index_overlapping_the_one_before_is_refused_and_the_file_scanned() {
+    // A second chunk index naming the first chunk one byte later and one byte
+    // shorter: a different chunk by its offset, the same message index by its
+    // end. The index's regions overlap, so the summary is refused and the file
+    // scanned instead, which lists each message once.
+    let genuine = fixture("ros2_png.mcap");
+    let expected = Store::open(genuine.clone())
+        .expect("genuine")
+        .messages
+        .len();
+    let u64_at = |b: &[u8], p: usize| u64::from_le_bytes(b[p..p + 8].try_into().expect("8 bytes"));
+    let footer_at = genuine.len() - 8 - 29;
+    let mut pos = u64_at(&genuine, footer_at + 9) as usize;
+    let index = loop {
+        let end = pos + 9 + u64_at(&genuine, pos + 1) as usize;
+        if genuine[pos] == 0x08 {
+            break genuine[pos..end].to_vec();
+        }
+        pos = end;
+    };
+    let mut shifted = index.clone();
+    // Body: start time, end time, chunk offset, chunk length, ...
+    let (at, len) = (u64_at(&index, 9 + 16), u64_at(&index, 9 + 24));
+    shifted[9 + 16..9 + 24].copy_from_slice(&(at + 1).to_le_bytes());
+    shifted[9 + 24..9 + 32].copy_from_slice(&(len - 1).to_le_bytes());
+    let mut mcap = genuine[..footer_at].to_vec();
+    mcap.extend_from_slice(&shifted);
+    mcap.extend_from_slice(&genuine[footer_at..]);
+    let store = Store::open(mcap).expect("scanned");
+    assert!(
+        store.warnings().iter().any(|w| w.contains("overlaps")),
+        "{:?}",
+        store.warnings()
+    );
+    assert_eq!(store.messages.len(), expected);
+}
