@@ -111,6 +111,12 @@ pub trait TrackingStep {
     const ALGORITHM: Algorithm;
     /// Called with freshly (re)initialised nodes: forget per-track state.
     fn start(&mut self, nodes: &[Vec3]);
+    /// `true` when the per-track state (if any) belongs to `nodes`: as many
+    /// entries and finite. A state that does not (a restored snapshot of
+    /// another rope) is started afresh rather than stepped.
+    fn fits(&self, _nodes: &[Vec3]) -> bool {
+        true
+    }
     /// New nodes from the previous ones and this frame's cloud.
     fn step(
         &mut self,

@@ -4,7 +4,7 @@
 use std::io::Read;
 
 use crate::error::SequenceError;
-use crate::source::{is_inside_name, MemorySource};
+use crate::source::{check_file_size, is_inside_name, MemorySource};
 
 /// Most entries accepted in one archive.
 pub const MAX_ARCHIVE_ENTRIES: usize = 200_000;
@@ -43,6 +43,7 @@ pub fn unpack_zip(bytes: &[u8], name: &str) -> Result<MemorySource, SequenceErro
             .by_index_raw(i)
             .map_err(|e| invalid(format!("entry {i}: {e}")))?;
         total = total.saturating_add(entry.size());
+        check_file_size(format!("{name}/{}", entry.name()), entry.size())?;
         if entry.compressed_size() > 0
             && entry.size() / entry.compressed_size().max(1) > MAX_COMPRESSION_RATIO
         {
@@ -148,5 +149,26 @@ mod tests {
         let z = zip_of(&[("big.bin", &zeros)]);
         let e = unpack_zip(&z, "bomb.zip").expect_err("refused").to_string();
         assert!(e.contains("zip bomb"), "{e}");
+    }
+
+    #[test]
+    fn an_entry_above_the_file_cap_is_refused_before_it_is_unpacked() {
+        // Stored, so no ratio rule applies: only the per-file cap can refuse it.
+        let big = vec![7u8; crate::source::MAX_FILE_BYTES as usize + 1];
+        let mut buf = std::io::Cursor::new(Vec::new());
+        {
+            let mut w = zip::ZipWriter::new(&mut buf);
+            let opts = zip::write::SimpleFileOptions::default()
+                .compression_method(zip::CompressionMethod::Stored)
+                .large_file(false);
+            w.start_file("seq/color/0.png", opts).expect("start");
+            w.write_all(&big).expect("write");
+            w.finish().expect("finish");
+        }
+        let e = unpack_zip(buf.get_ref(), "big.zip").expect_err("refused");
+        assert!(
+            matches!(e, SequenceError::TooLarge { ref path, .. } if path.contains("color/0.png")),
+            "{e}"
+        );
     }
 }

@@ -5,6 +5,7 @@
 #![warn(missing_docs)]
 
 pub mod archive;
+pub mod capped;
 pub mod decode;
 pub mod display;
 pub mod error;

@@ -175,6 +175,8 @@ pub fn recording_sequence<S: Source>(
     config: S,
     rec: OpenRecording,
 ) -> Result<Sequence<S>, SequenceError> {
+    // Before a name is made for each frame.
+    crate::sequence::check_frame_count(rec.name.clone(), rec.len())?;
     let camera = rec.camera()?;
     let names = (0..rec.len()).map(|i| rec.frame_name(i)).collect();
     let rates = (1.0 / rec.depth_units(), rec.fps());
@@ -212,4 +214,41 @@ pub fn open_recording(
         files.insert("dlo.json", bytes);
     }
     recording_sequence(Box::new(files) as Box<dyn Source>, rec)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sequence::MAX_FRAMES;
+
+    /// A reader that never decodes: only its length matters here.
+    struct Endless;
+
+    impl FrameReader for Endless {
+        fn frame(&mut self, _: usize) -> Result<DecodedFrame, SequenceError> {
+            Err(SequenceError::invalid("endless", "not decoded"))
+        }
+
+        fn info(&self) -> RecordingInfo {
+            RecordingInfo::default()
+        }
+    }
+
+    #[test]
+    fn a_recording_of_more_pairs_than_max_frames_is_refused() {
+        let make = |n: usize| {
+            Sequence::with_reader(
+                MemorySource::new("rec"),
+                CameraIntrinsics::D435I_640X480,
+                (1000.0, 30.0),
+                vec![String::new(); n],
+                Box::new(Endless),
+            )
+        };
+        assert!(make(MAX_FRAMES).is_ok());
+        assert!(matches!(
+            make(MAX_FRAMES + 1),
+            Err(SequenceError::TooLarge { .. })
+        ));
+    }
 }

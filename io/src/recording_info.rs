@@ -4,7 +4,7 @@
 use serde::Serialize;
 
 /// What a recording holds, as `upetrack info` shows it.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Default, Serialize)]
 pub struct RecordingInfo {
     /// The file.
     pub path: String,
@@ -31,7 +31,7 @@ pub struct RecordingInfo {
 }
 
 /// One stream of [`RecordingInfo`].
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Default, Serialize)]
 pub struct StreamInfo {
     /// Topic.
     pub topic: String,

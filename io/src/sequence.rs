@@ -128,7 +128,10 @@ pub struct DloConfig {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub segmentation: Option<SegmentationConfig>,
     /// Occlusion rectangles.
-    #[serde(default)]
+    #[serde(
+        default,
+        deserialize_with = "crate::capped::vec::<_, _, MAX_OCCLUSIONS>"
+    )]
     pub occlusions: Vec<OcclusionConfig>,
     /// Ground-truth file name.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -209,11 +212,16 @@ pub struct GroundTruthFrame {
     /// Frame index.
     pub frame: usize,
     /// Ordered centre-line points, metres, colour camera frame.
+    #[serde(deserialize_with = "crate::capped::vec::<_, _, MAX_GROUNDTRUTH_POINTS>")]
     pub points: Vec<[f64; 3]>,
     /// Optional: for each point, whether an occluder hides it from the
     /// camera (written by `upetrack synth`; evaluation counts the frames
     /// from the first such one as occluded when no rectangle says so).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    #[serde(
+        default,
+        skip_serializing_if = "Vec::is_empty",
+        deserialize_with = "crate::capped::vec::<_, _, MAX_GROUNDTRUTH_POINTS>"
+    )]
     pub occluded: Vec<bool>,
 }
 
@@ -221,6 +229,7 @@ pub struct GroundTruthFrame {
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq, Default)]
 pub struct GroundTruthFile {
     /// Frames with a reference (any may be missing).
+    #[serde(deserialize_with = "crate::capped::vec::<_, _, MAX_FRAMES>")]
     pub frames: Vec<GroundTruthFrame>,
 }
 
@@ -325,16 +334,23 @@ fn sorted_files<S: Source>(
             !n.starts_with('.') && exts.iter().any(|e| lower.ends_with(e))
         })
         .collect();
+    check_frame_count(source.display(dir), names.len())?;
     names.sort();
-    if names.len() > MAX_FRAMES {
+    Ok(names.into_iter().map(|n| format!("{dir}/{n}")).collect())
+}
+
+/// An error when a sequence of `n` frames (a folder's listing, a
+/// recording's pairs) is above [`MAX_FRAMES`]; `path` names it.
+pub(crate) fn check_frame_count(path: String, n: usize) -> Result<(), SequenceError> {
+    if n > MAX_FRAMES {
         return Err(SequenceError::too_large(
-            source.display(dir),
+            path,
             "number of frames",
-            names.len() as u64,
+            n as u64,
             MAX_FRAMES as u64,
         ));
     }
-    Ok(names.into_iter().map(|n| format!("{dir}/{n}")).collect())
+    Ok(())
 }
 
 /// `dlo.json` of `source`, or the defaults when there is none.
@@ -490,6 +506,7 @@ impl<S: Source> Sequence<S> {
         (color_files, depth_files): (Vec<String>, Vec<String>),
         reader: Option<RefCell<Box<dyn FrameReader>>>,
     ) -> Result<Self, SequenceError> {
+        check_frame_count(source.display(""), color_files.len())?;
         let hsv = config.check(&source.display("dlo.json"))?;
         let gt_name = config
             .groundtruth

@@ -9,6 +9,19 @@ use crate::error::SequenceError;
 /// Largest single file read, bytes (a 1280x720 PNG is a few MB).
 pub const MAX_FILE_BYTES: u64 = 64 * 1024 * 1024;
 
+/// An error when a file of `len` bytes (named `path`) is above [`MAX_FILE_BYTES`].
+pub(crate) fn check_file_size(path: impl Into<String>, len: u64) -> Result<(), SequenceError> {
+    if len > MAX_FILE_BYTES {
+        return Err(SequenceError::too_large(
+            path,
+            "file size in bytes",
+            len,
+            MAX_FILE_BYTES,
+        ));
+    }
+    Ok(())
+}
+
 /// A tree of files addressed by `/`-separated paths relative to the sequence root.
 pub trait Source {
     /// Names of the files directly inside folder `dir` ("" for the root), unsorted.
@@ -79,14 +92,7 @@ impl Source for FolderSource {
             source,
         };
         let len = std::fs::metadata(&p).map_err(io)?.len();
-        if len > MAX_FILE_BYTES {
-            return Err(SequenceError::too_large(
-                p.display().to_string(),
-                "file size in bytes",
-                len,
-                MAX_FILE_BYTES,
-            ));
-        }
+        check_file_size(p.display().to_string(), len)?;
         std::fs::read(&p).map_err(io)
     }
 
@@ -201,13 +207,13 @@ impl Source for MemorySource {
     }
 
     fn read(&self, path: &str) -> Result<Vec<u8>, SequenceError> {
-        self.files
-            .get(path)
-            .cloned()
-            .ok_or_else(|| SequenceError::Missing {
-                path: self.display(path),
-                what: "file",
-            })
+        let bytes = self.files.get(path).ok_or_else(|| SequenceError::Missing {
+            path: self.display(path),
+            what: "file",
+        })?;
+        // The same rule as a folder's, whoever filled the source.
+        check_file_size(self.display(path), bytes.len() as u64)?;
+        Ok(bytes.clone())
     }
 
     fn display(&self, path: &str) -> String {
@@ -264,6 +270,18 @@ mod tests {
         assert_eq!(names, ["000000.jpg", "000001.jpg"]);
         assert!(m.is_dir("color") && m.is_file("camera_intrinsic.json"));
         assert_eq!(m.read("color/000001.jpg").expect("read"), vec![1]);
+    }
+
+    #[test]
+    fn memory_source_refuses_a_file_above_the_cap_as_a_folder_does() {
+        let mut m = MemorySource::new("page");
+        m.insert("color/0.png", vec![0; MAX_FILE_BYTES as usize + 1]);
+        m.insert("color/1.png", vec![0; 8]);
+        assert!(matches!(
+            m.read("color/0.png"),
+            Err(SequenceError::TooLarge { .. })
+        ));
+        assert!(m.read("color/1.png").is_ok());
     }
 
     #[test]

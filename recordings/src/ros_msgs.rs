@@ -407,13 +407,24 @@ pub(crate) mod tests {
 
     #[test]
     fn camera_info_refuses_a_huge_distortion_array() {
-        let mut b = Vec::new();
-        b.extend([0u8; 12]);
-        b.extend(0u32.to_le_bytes());
-        b.extend(48u32.to_le_bytes());
-        b.extend(64u32.to_le_bytes());
-        b.extend(0u32.to_le_bytes());
-        b.extend(1_000_000u32.to_le_bytes());
-        assert!(camera_info(&b, Wire::Ros1, "/info").is_err());
+        // A whole message, its D and K arrays present: only the cap refuses it.
+        let info = |n: u32| {
+            let mut b = Vec::new();
+            b.extend([0u8; 12]);
+            b.extend(0u32.to_le_bytes());
+            b.extend(48u32.to_le_bytes());
+            b.extend(64u32.to_le_bytes());
+            b.extend(0u32.to_le_bytes());
+            b.extend(n.to_le_bytes());
+            for _ in 0..n + 9 {
+                b.extend(1.0f64.to_le_bytes());
+            }
+            b
+        };
+        let at_cap = camera_info(&info(MAX_DISTORTION_COEFFS as u32), Wire::Ros1, "/info");
+        assert_eq!(at_cap.expect("at the cap").d.len(), MAX_DISTORTION_COEFFS);
+        let e = camera_info(&info(MAX_DISTORTION_COEFFS as u32 + 1), Wire::Ros1, "/info")
+            .expect_err("over the cap");
+        assert!(e.to_string().contains("distortion coefficients"), "{e}");
     }
 }

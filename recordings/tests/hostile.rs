@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use upetrack_recordings::store::Store;
-use upetrack_recordings::RecordingError;
+use upetrack_recordings::{Recording, RecordingError, RecordingOptions};
 
 fn fixture(name: &str) -> Vec<u8> {
     let path: PathBuf = Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -210,4 +210,42 @@ fn mcap_chunk_index_overlapping_the_one_before_is_refused_and_the_file_scanned()
         store.warnings()
     );
     assert_eq!(store.messages.len(), expected);
+}
+
+#[test]
+fn corrupt_chunk_is_an_error_naming_its_offset_not_a_panic() {
+    let genuine = fixture("ros_lz4.bag");
+    let chunks: Vec<(usize, usize, u8)> = bag_records(&genuine, 13)
+        .into_iter()
+        .filter(|r| r.2 == 0x05)
+        .collect();
+    assert!(chunks.len() >= 2, "{} chunks", chunks.len());
+    // The middle of the last chunk's compressed data scribbled over (the
+    // first holds the calibration, read on opening).
+    let (start, end, _) = chunks[chunks.len() - 1];
+    let mut bag = genuine.clone();
+    let mid = (start + end) / 2;
+    for b in &mut bag[mid..mid + 64] {
+        *b ^= 0x5a;
+    }
+    // The index is intact: the bag opens, and the damage shows when the
+    // frames of that chunk are read, as an error naming the chunk's offset.
+    let mut rec = Recording::open(bag, &RecordingOptions::default()).expect("index intact");
+    let mut errors = Vec::new();
+    for i in 0..rec.len() {
+        if let Err(e) = rec.frame(i) {
+            errors.push(e);
+        }
+    }
+    assert!(
+        !errors.is_empty() && errors.len() < rec.len(),
+        "{} errors",
+        errors.len()
+    );
+    for e in &errors {
+        assert!(
+            matches!(e, RecordingError::Corrupt { offset, .. } if *offset == start as u64),
+            "{e} (chunk at {start})"
+        );
+    }
 }

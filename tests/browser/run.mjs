@@ -806,4 +806,6 @@ await context.close();
 server.close();
 fs.rmSync(tmp, { recursive: true, force: true });
 console.log(`${passed} passed, ${failed} failed`);
-process.exit(failed ? 1 : 0);
+// A run that ran nothing (an ONLY= pattern matching no test) is not a pass.
+if (passed + failed === 0) console.log('no test ran: the ONLY= pattern matches no test name');
+process.exit(failed || passed + failed === 0 ? 1 : 0);

@@ -279,8 +279,7 @@ impl WasmTracker {
         }
         let s: upetrack::tracker::TrackerSnapshot =
             serde_wasm_bindgen::from_value(snapshot).map_err(js_err)?;
-        self.tracker.restore(s);
-        Ok(())
+        self.tracker.restore(s).map_err(js_err)
     }
 
     /// Forgets the state; the next frame initialises.

@@ -610,6 +610,17 @@ impl TrackingStep for Cdcpd2Step {
         self.state = None;
     }
 
+    fn fits(&self, nodes: &[Vec3]) -> bool {
+        self.state.as_ref().is_none_or(|s| {
+            s.template.len() == nodes.len()
+                && s.rest.len() + 1 == nodes.len()
+                && s.template.iter().all(math::is_finite)
+                && s.rest.iter().all(|r| r.is_finite())
+                && s.beta.is_finite()
+                && s.beta > 0.0
+        })
+    }
+
     fn step(
         &mut self,
         input: &StepInput<'_>,

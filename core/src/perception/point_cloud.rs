@@ -649,7 +649,18 @@ mod tests {
 
     #[test]
     fn cap_points_bounds_the_cloud() {
-        let pts = vec![Vec3::zeros(); 45_001];
-        assert!(cap_points(pts, MAX_CLOUD_POINTS).len() <= MAX_CLOUD_POINTS);
+        // Points along x: what is kept must stay spread over the whole rope.
+        let line =
+            |n: usize| -> Vec<Vec3> { (0..n).map(|i| Vec3::new(i as f64, 0.0, 1.0)).collect() };
+        let n = 3 * MAX_CLOUD_POINTS + 1;
+        let kept = cap_points(line(n), MAX_CLOUD_POINTS);
+        assert!(kept.len() <= MAX_CLOUD_POINTS && kept.len() >= MAX_CLOUD_POINTS / 2);
+        assert_eq!(kept[0].x, 0.0);
+        assert!(kept[kept.len() - 1].x >= (n - 5) as f64);
+        // At the cap nothing is dropped.
+        assert_eq!(
+            cap_points(line(MAX_CLOUD_POINTS), MAX_CLOUD_POINTS).len(),
+            MAX_CLOUD_POINTS
+        );
     }
 }

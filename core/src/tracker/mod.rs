@@ -6,7 +6,7 @@ use alloc::vec;
 use alloc::vec::Vec;
 
 use crate::baselines::trackdlo::TrackDloReport;
-use crate::math::{Vec2, Vec3};
+use crate::math::{self, Vec2, Vec3};
 use crate::params::{Params, ParamsError};
 use crate::perception::camera::{CameraError, CameraIntrinsics};
 use crate::perception::evidence::Evidence;
@@ -64,6 +64,12 @@ pub enum TrackerError {
     /// An invalid rope prior.
     #[error(transparent)]
     Prior(#[from] PriorError),
+    /// A snapshot that no tracker could have taken.
+    #[error("a snapshot the tracker cannot return to: {reason}")]
+    Snapshot {
+        /// What is wrong with it.
+        reason: &'static str,
+    },
 }
 
 /// Why a frame produced no tracked nodes.
@@ -327,8 +333,24 @@ impl Tracker {
 
     /// Goes back to a state taken by [`Tracker::snapshot`]. A snapshot with
     /// another node count is resampled to the current one; one taken with
-    /// another node count or algorithm starts the step afresh.
-    pub fn restore(&mut self, snapshot: TrackerSnapshot) {
+    /// another node count or algorithm, or whose step state does not fit its
+    /// nodes, starts the step afresh. A snapshot with non-finite nodes or
+    /// lengths is refused and the tracker left as it was.
+    pub fn restore(&mut self, snapshot: TrackerSnapshot) -> Result<(), TrackerError> {
+        let bad = |reason| Err(TrackerError::Snapshot { reason });
+        if let Some(s) = &snapshot.state {
+            if !s.nodes.iter().all(math::is_finite) {
+                return bad("a node is not finite");
+            }
+        }
+        let lengths = [
+            snapshot.known_length,
+            snapshot.known_radius,
+            snapshot.rest_length,
+        ];
+        if lengths.iter().flatten().any(|l| !l.is_finite() || *l < 0.0) {
+            return bad("a length is negative or not finite");
+        }
         let mut restart = snapshot.stepper.algorithm() != self.params.algorithm;
         self.state = snapshot.state.map(|mut s| {
             if s.nodes.len() != self.params.node_count && !s.nodes.is_empty() {
@@ -342,11 +364,12 @@ impl Tracker {
         self.rest_length = snapshot.rest_length;
         self.refused_jump_cloud = snapshot.refused_jump_cloud;
         self.stepper = snapshot.stepper;
-        if restart {
+        if restart || !self.stepper.fits(self.nodes()) {
             self.stepper = Stepper::new(self.params.algorithm);
             let nodes = self.nodes().to_vec();
             self.stepper.start(&nodes);
         }
+        Ok(())
     }
 
     /// Forgets the state: the next frame initialises again.
@@ -778,7 +801,7 @@ mod tests {
         let snap = t.snapshot();
         t.reset();
         assert_eq!(t.snapshot(), empty);
-        t.restore(snap.clone());
+        t.restore(snap.clone()).expect("its own snapshot");
         assert_eq!(t.nodes(), &nodes[..]);
         assert_eq!(t.snapshot(), snap);
         let p = Params {
@@ -786,7 +809,51 @@ mod tests {
             ..Params::default()
         };
         t.set_params(p).expect("params");
-        t.restore(snap);
+        t.restore(snap).expect("its own snapshot");
         assert_eq!(t.nodes().len(), 12);
+    }
+
+    #[test]
+    fn a_snapshot_with_a_nan_node_is_refused_and_the_state_kept() {
+        let cam = CameraIntrinsics::D435I_640X480;
+        let mut t = Tracker::new(Params::default(), cam, HsvRange::default()).expect("tracker");
+        let nodes: Vec<Vec3> = (0..24)
+            .map(|i| Vec3::new(i as f64 * 0.01, 0.0, 0.6))
+            .collect();
+        t.state = Some(TrackState {
+            nodes: nodes.clone(),
+            lost: false,
+        });
+        let mut bad = t.snapshot();
+        if let Some(s) = bad.state.as_mut() {
+            s.nodes[3].x = f64::NAN;
+        }
+        assert!(matches!(t.restore(bad), Err(TrackerError::Snapshot { .. })));
+        assert_eq!(t.nodes(), &nodes[..]);
+        let mut bad = t.snapshot();
+        bad.known_length = Some(f64::INFINITY);
+        assert!(t.restore(bad).is_err());
+    }
+
+    #[test]
+    fn a_snapshot_whose_step_state_is_of_another_rope_restarts_the_step() {
+        let cam = CameraIntrinsics::D435I_640X480;
+        let params = Params {
+            algorithm: Algorithm::Trackdlo,
+            ..Params::default()
+        };
+        let mut t = Tracker::new(params, cam, HsvRange::default()).expect("tracker");
+        let nodes: Vec<Vec3> = (0..params.node_count)
+            .map(|i| Vec3::new(i as f64 * 0.01, 0.0, 0.6))
+            .collect();
+        t.state = Some(TrackState {
+            nodes: nodes.clone(),
+            lost: false,
+        });
+        let mut snap = t.snapshot();
+        snap.stepper.start(&nodes[..3]);
+        assert!(!snap.stepper.fits(&nodes));
+        t.restore(snap).expect("restored");
+        assert!(t.stepper.fits(&nodes));
     }
 }

@@ -82,10 +82,25 @@ impl Stepper {
         }
     }
 
-    /// The step, with the algorithm's settings taken from `params`. Nodes
+    /// `true` when the step's state belongs to `nodes` ([`TrackingStep::fits`]).
+    pub fn fits(&self, nodes: &[Vec3]) -> bool {
+        match self {
+            Stepper::Upetrack => UpeTrackStep.fits(nodes),
+            Stepper::Cpd => CpdStep.fits(nodes),
+            Stepper::Trackdlo(s) => s.fits(nodes),
+            #[cfg(feature = "cdcpd2")]
+            Stepper::Cdcpd2(s) => s.fits(nodes),
+        }
+    }
+
+    /// The step, with the algorithm's settings taken from `params`. A state
+    /// that does not fit the previous nodes is started afresh first; nodes
     /// that come out of the wrong count or not finite are replaced by the
     /// previous ones.
     pub fn step(&mut self, input: &StepInput<'_>, params: &Params) -> StepOutput<StepReports> {
+        if !self.fits(input.previous) {
+            self.start(input.previous);
+        }
         let mut out = match self {
             Stepper::Upetrack => {
                 UpeTrackStep
@@ -120,6 +135,39 @@ impl Stepper {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A state of another rope (a restored snapshot): TrackDLO's rest
+    /// coordinates for 3 nodes, stepped with 24. It indexed past its rest
+    /// coordinates and panicked (the page's worker died on the next frame).
+    #[test]
+    fn a_step_state_of_another_node_count_is_started_afresh_not_a_panic() {
+        use crate::baselines::trackdlo::TrackDloStep;
+        use crate::CameraIntrinsics;
+        use alloc::{vec, vec::Vec};
+        let short: Vec<Vec3> = (0..3)
+            .map(|i| Vec3::new(i as f64 * 0.01, 0.0, 0.6))
+            .collect();
+        let mut other = TrackDloStep::default();
+        other.start(&short);
+        let nodes: Vec<Vec3> = (0..24)
+            .map(|i| Vec3::new(i as f64 * 0.01, 0.0, 0.6))
+            .collect();
+        assert!(!other.fits(&nodes) && other.fits(&short));
+        let mut stepper = Stepper::Trackdlo(other);
+        let visible = vec![true; nodes.len()];
+        let input = StepInput {
+            previous: &nodes,
+            cloud: &nodes,
+            visible: &visible,
+            partly_seen: &[],
+            camera: &CameraIntrinsics::D435I_640X480,
+            evidence: None,
+            rest_length: None,
+        };
+        let out = stepper.step(&input, &Params::default());
+        assert_eq!(out.nodes.len(), nodes.len());
+        assert!(stepper.fits(&nodes));
+    }
 
     #[test]
     fn every_algorithm_has_a_step() {

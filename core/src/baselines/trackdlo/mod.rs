@@ -163,6 +163,15 @@ impl TrackingStep for TrackDloStep {
         self.state = Some(TrackDloState::new(nodes));
     }
 
+    fn fits(&self, nodes: &[Vec3]) -> bool {
+        self.state.as_ref().is_none_or(|s| {
+            s.rest.len() == nodes.len()
+                && s.rest.iter().all(|r| r.is_finite())
+                && s.variance.is_finite()
+                && s.variance >= 0.0
+        })
+    }
+
     fn step(
         &mut self,
         input: &StepInput<'_>,
