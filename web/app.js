@@ -6,7 +6,7 @@ import { state, $, guarded, showError, showNote, ALGORITHM_NAMES } from './state
 import { call } from './worker-client.js';
 import { Request } from './protocol.js';
 import { ready as coreReady } from './core.js';
-import { hooks, loadSample, openFiles, openZip, openRecording, isRecording, entryFiles } from './sequence.js';
+import { hooks, loadSample, openFiles, openZip, openRecording, kindOf, entryFiles } from './sequence.js';
 import { goTo, play, updatePlayButton, SPEEDS } from './playback.js';
 import { bindPanels, setHsvInputs, renderRects, addRect, pickAt, setMode, applyHsv } from './panels.js';
 import { buildParamPanel, setParamInputs, applyParamsQuery, showGroupsFor } from './params-panel.js';
@@ -64,14 +64,21 @@ $('folder').onchange = guarded(async (e) => {
 $('recording').onchange = guarded(async (e) => {
   const files = [...e.target.files];
   e.target.value = '';
-  const bag = files.find((f) => isRecording(f.name));
-  if (!bag) throw new Error('Pick a .bag, .db3 or .mcap recording (and, optionally, its dlo.json).');
-  await openRecording(bag, files.find((f) => /\.json$/i.test(f.name)) || null);
+  const kinds = await Promise.all(files.map(kindOf));
+  const i = kinds.findIndex((k) => k.kind === 'recording');
+  if (i < 0) {
+    const said = files.length === 1 ? `${files[0].name} is ${kinds[0].what}, not a recording. ` : '';
+    throw new Error(`${said}Pick a .bag, .db3 or .mcap recording (and, optionally, its dlo.json).`);
+  }
+  await openRecording(files[i], files.find((f, k) => k !== i && /\.json$/i.test(f.name)) || null);
 });
 $('zip').onchange = guarded(async (e) => {
   const f = e.target.files[0];
   e.target.value = '';
-  if (f) await openZip(f);
+  if (!f) return;
+  const k = await kindOf(f);
+  if (k.kind !== 'zip') throw new Error(`${f.name} is ${k.what}, not a .zip of a sequence folder.`);
+  await openZip(f);
 });
 const stage = $('stage');
 stage.ondragover = (e) => { e.preventDefault(); $('drop-hint').hidden = false; };

@@ -1,20 +1,12 @@
 // The result JSON of the contract (docs/sequence-format.md) for what the
 // page tracked, and its download.
 import { state } from './state.js';
+import { resultFile } from './core.js';
 
 export function resultJson() {
-  return {
-    algorithm: state.params.algorithm,
-    params: state.params,
-    frames: state.results.slice(0, state.tracked + 1).map((r, k) => {
-      const f = { frame: k, nodes: [], visible: r.visible.map((v) => v === 1), track_ms: r.trackMs, total_ms: r.totalMs };
-      for (let j = 0; j < r.nodes.length; j += 3) f.nodes.push([r.nodes[j], r.nodes[j + 1], r.nodes[j + 2]]);
-      if (r.status === 'lost') { f.lost = true; f.reason = r.reason; }
-      if (r.status === 'recovered') f.recovered = true;
-      if (r.init) f.init = r.init;
-      return f;
-    }),
-  };
+  // Made by the core from the records its tracker produced: the command's format, field for field.
+  const records = state.results.slice(0, state.tracked + 1).map((r) => r.record);
+  return JSON.parse(resultFile(state.params, records));
 }
 
 // The configuration in force as a dlo.json: the colour range, the

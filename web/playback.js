@@ -45,7 +45,7 @@ export function keep(r) {
   return {
     nodes: r.nodes, nodesPx: r.nodesPx, visible: r.visible, status: r.status, reason: r.reason, init: r.init || null,
     segmentMs: r.segmentMs, cloudMs: r.cloudMs, trackMs: r.trackMs, totalMs: r.totalMs, decodeMs: r.decodeMs,
-    error: r.error, snapshot: r.snapshot,
+    error: r.error, snapshot: r.snapshot, record: r.record,
     second: r.second || null,
   };
 }

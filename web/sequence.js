@@ -3,7 +3,7 @@
 import { state, progress, $, settleLookahead } from './state.js';
 import { call } from './worker-client.js';
 import { Request } from './protocol.js';
-import { commonRoot } from './core.js';
+import { commonRoot, activeOcclusions, inputKind, inputHeadBytes } from './core.js';
 
 // Set by app.js: what happens once a sequence is open (show frame 0).
 export const hooks = { opened: async () => {}, closing: () => {} };
@@ -18,14 +18,19 @@ async function openSequence(name, paths, read, fromZip = false) {
     json[n] = await read(n);
     progress(++done, jsonNames.length + 1);
   }
-  const images = paths.filter((p) => /^(color|rgb|image|depth)\/[^/]+$/i.test(p));
+  // Every file one folder down: which folders hold the frames is the core's rule.
+  const images = paths.filter((p) => /^[^/]+\/[^/]+$/.test(p));
   const { info } = await call(Request.info(name, json, images));
   await finishOpening(generation, { name, info, read, fromZip, fromRecording: false });
 }
 
-// Camera recordings the page reads: ROS1 .bag (RealSense Viewer, rs-record
-// up to 2.55, realsense-ros), rosbag2 .db3 (librealsense 2.59, ROS 2) and .mcap (ROS 2).
-export const isRecording = (name) => /\.(bag|db3|mcap)$/i.test(name);
+// What a file is, by its first bytes, whatever its name: a recording (ROS1
+// .bag of the RealSense Viewer, rs-record up to 2.55 or realsense-ros,
+// rosbag2 .db3 of librealsense 2.59 or ROS 2, .mcap), a zip, or what else
+// (the core's rule, as the command's): `{kind, what}`.
+export async function kindOf(file) {
+  return inputKind(new Uint8Array(await file.slice(0, inputHeadBytes()).arrayBuffer()));
+}
 
 // A recording, with an optional dlo.json picked or dropped beside it. The
 // worker reads the file in slices; without a dlo.json, the user picks the
@@ -86,13 +91,20 @@ export async function openGenerated(name, files) {
 // Files from a folder picker or a drop ({ path, file }): the folders above
 // the sequence's layout are stripped (the core's rule).
 export async function openFiles(files, label) {
-  const zip = files.find((f) => f.path.toLowerCase().endsWith('.zip'));
-  if (zip && files.length === 1) return openZip(zip.file);
-  const rec = files.filter((f) => isRecording(f.path));
-  if (rec.length === 1 && files.length <= 2) {
-    const other = files.find((f) => f !== rec[0]);
-    if (other && !/\.json$/i.test(other.path)) throw new Error(`${other.path}: open a recording alone or with its dlo.json`);
-    return openRecording(rec[0].file, other ? other.file : null);
+  // One or two files: a .zip, a recording (with its dlo.json), or a mistake named for what it is.
+  if (files.length <= 2) {
+    const kinds = await Promise.all(files.map((f) => kindOf(f.file)));
+    if (files.length === 1 && kinds[0].kind === 'zip') return openZip(files[0].file);
+    const r = kinds.findIndex((k) => k.kind === 'recording');
+    if (r >= 0) {
+      const other = files[1 - r];
+      if (other && !/\.json$/i.test(other.path)) throw new Error(`${other.path}: open a recording alone or with its dlo.json`);
+      return openRecording(files[r].file, other ? other.file : null);
+    }
+    if (files.length === 1 && !files[0].path.includes('/')) {
+      // A loose file, not a folder of one.
+      throw new Error(`${files[0].path} is ${kinds[0].what}: open a sequence folder, a .zip of one, or a recording (.bag, .db3, .mcap).`);
+    }
   }
   const paths = files.map((f) => f.path.split('/').filter(Boolean).join('/'));
   const root = commonRoot(paths);
@@ -143,10 +155,7 @@ export async function entryFiles(entry, prefix, out) {
 
 // The occlusion rectangles of frame i: the sequence's and the drawn ones, flat.
 export function activeRects(i) {
-  const flat = [];
-  for (const o of state.seq.info.occlusions) {
-    if (i >= o.frames[0] && i <= o.frames[1]) flat.push(...o.rect);
-  }
+  const flat = Array.from(activeOcclusions(state.seq.info.occlusions, i));
   for (const r of state.userRects) flat.push(...r);
   return flat;
 }

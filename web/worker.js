@@ -28,7 +28,7 @@ function track(t, f, m) {
   const out = {
     nodes: Array.from(r.nodes), nodesPx: Array.from(r.nodesPx), visible: Array.from(r.visible),
     status: r.status, reason: r.reason ?? null, init: r.init, segmentMs: r.segment_ms, cloudMs: r.cloud_ms, trackMs: r.track_ms, totalMs: r.total_ms,
-    cloudPoints: r.cloud_points,
+    cloudPoints: r.cloud_points, record: r.record,
   };
   r.free();
   out.error = m.groundtruth ? Array.from(t.lastError(new Float64Array(m.groundtruth))) : [];

@@ -238,8 +238,15 @@ fn folder_problems_are_named() {
     }
     fails_with(&s, &[], &["no .jpg or .png frames"]);
 
+    // A file that is not an input is named for what it is.
     let file = s.join("dlo.json");
-    fails_with(&file, &[], &["not a sequence folder or a .zip"]);
+    fails_with(&file, &[], &["a JSON file", "not a sequence folder"]);
+    let empty_file = s.join("empty.bag");
+    std::fs::write(&empty_file, b"").expect("write");
+    fails_with(&empty_file, &[], &["an empty file"]);
+    let jpeg = s.join("photo.bag");
+    std::fs::write(&jpeg, [0xff, 0xd8, 0xff, 0xe0, 0, 0x10]).expect("write");
+    fails_with(&jpeg, &[], &["a JPEG image"]);
 }
 
 #[test]

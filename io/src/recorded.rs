@@ -14,13 +14,7 @@ use crate::source::{is_inside_name, FolderSource, MemorySource, Source};
 
 /// `true` when the file at `path` starts like a recording this project reads.
 pub fn is_recording_file(path: &Path) -> bool {
-    let mut head = [0u8; 16];
-    let Ok(mut f) = std::fs::File::open(path) else {
-        return false;
-    };
-    use std::io::Read;
-    let n = f.read(&mut head).unwrap_or(0);
-    upetrack_recordings::is_recording(&head[..n])
+    crate::open::input_kind_of_file(path) == crate::open::InputKind::Recording
 }
 
 /// A recording opened for reading frames.

@@ -61,21 +61,39 @@ pub fn track_frame(
     now_ms: &mut dyn FnMut() -> f64,
 ) -> Result<FrameRecord, upetrack::tracker::TrackerError> {
     let t = run_frame(tracker, frame, occlusions, now_ms)?;
+    Ok(frame_record(index, &t))
+}
+
+/// The result JSON's record of frame `index` (the one definition of it:
+/// the command writes it, the page keeps it per frame).
+pub fn frame_record(index: usize, t: &TimedFrame) -> FrameRecord {
     let reason = match &t.output.status {
         FrameStatus::Lost(r) => Some(r.to_string()),
         _ => None,
     };
-    Ok(FrameRecord {
+    FrameRecord {
         frame: index,
         nodes: t.output.nodes.iter().map(|p| [p.x, p.y, p.z]).collect(),
-        visible: t.output.visible,
+        visible: t.output.visible.clone(),
         track_ms: t.track_ms,
         total_ms: t.total_ms,
         lost: reason.is_some(),
         reason,
         recovered: t.output.status == FrameStatus::Recovered,
-        init: t.output.init,
-    })
+        init: t.output.init.clone(),
+    }
+}
+
+/// A whole result from its frames' records, numbered by position.
+pub fn track_result(params: Params, mut frames: Vec<FrameRecord>) -> TrackResult {
+    for (k, f) in frames.iter_mut().enumerate() {
+        f.frame = k;
+    }
+    TrackResult {
+        algorithm: params.algorithm.name().to_string(),
+        params,
+        frames,
+    }
 }
 
 /// Tracks every frame of `seq` with `params`. A frame whose images cannot
@@ -98,9 +116,5 @@ pub fn track_sequence<S: Source>(
             .map_err(|e| SequenceError::invalid(&seq.color_files[i], e.to_string()))?;
         frames.push(record);
     }
-    Ok(TrackResult {
-        algorithm: params.algorithm.name().to_string(),
-        params,
-        frames,
-    })
+    Ok(track_result(params, frames))
 }

@@ -77,6 +77,11 @@ await test('wasm and native give bit-identical nodes (colour decoded in wasm)', 
   ref.frames.forEach((f, k) => f.nodes.forEach((p, j) => p.forEach((c, d) => { worst = Math.max(worst, Math.abs(c - web.frames[k].nodes[j][d])); })));
   console.log(`     largest difference ${worst.toExponential(2)} m over ${ref.frames.length} frames`);
   assert(worst === 0, `largest difference ${worst}`);
+  // The whole file is the command's, field for field, but for the clocks.
+  const untimed = (f) => JSON.stringify({ ...f, track_ms: 0, total_ms: 0 });
+  const differing = ref.frames.findIndex((f, k) => untimed(f) !== untimed(web.frames[k]));
+  assert(differing < 0, `frame ${differing}: ${untimed(ref.frames[differing] || {})} vs ${untimed(web.frames[differing] || {})}`);
+  assert(web.algorithm === ref.algorithm && JSON.stringify(web.params) === JSON.stringify(ref.params), 'algorithm or params differ');
   const t = web.frames.slice(1).map((f) => f.total_ms).sort((a, b) => a - b);
   const tr = web.frames.slice(1).map((f) => f.track_ms).sort((a, b) => a - b);
   console.log(`     in Chromium: median track_ms ${tr[tr.length >> 1].toFixed(3)}, median total_ms ${t[t.length >> 1].toFixed(3)}`);
@@ -113,7 +118,15 @@ await test('a bad file and a wrong folder show a message and the page keeps work
   await page.setInputFiles('#zip', bad);
   await page.waitForFunction(() => !document.getElementById('message').hidden, null, { timeout: 10000 });
   const m1 = await messageOf(page);
-  assert(m1.includes('notes.zip') && m1.includes('not a zip'), m1);
+  assert(m1.includes('notes.zip') && m1.includes('not a .zip'), m1);
+  // A file is named for what its bytes say, whatever its name (the command's rule).
+  const photo = path.join(tmp, 'photo.bag');
+  fs.copyFileSync(path.join(root, 'samples/static-s/color/000000.jpg'), photo);
+  await page.click('#message-close');
+  await page.setInputFiles('#recording', photo);
+  await page.waitForFunction(() => !document.getElementById('message').hidden, null, { timeout: 10000 });
+  const m0 = await messageOf(page);
+  assert(m0.includes('photo.bag is a JPEG image'), m0);
   // A truncated JPEG inside an otherwise good folder names the file.
   const broken = path.join(tmp, 'broken');
   fs.cpSync(path.join(root, 'samples/static-s'), broken, { recursive: true });

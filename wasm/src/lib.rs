@@ -9,12 +9,14 @@ use upetrack::perception::initialisation::InitReport;
 use upetrack::tracker::{FrameOutput, FrameStatus, Observation};
 use upetrack::{CameraIntrinsics, Frame, HsvRange, Params, Rect, Tracker, Vec3};
 use upetrack_io::decode::{decode_color, decode_depth};
-use upetrack_io::run::run_frame;
+use upetrack_io::result::FrameRecord;
+use upetrack_io::run::{frame_record, run_frame};
 use upetrack_io::sequence::{DloConfig, OcclusionConfig, RopeConfig, Sequence};
 use upetrack_io::source::{MemorySource, Source};
 use wasm_bindgen::prelude::*;
 
 mod browser;
+mod contract;
 mod explain;
 mod recording;
 mod scene;
@@ -157,6 +159,7 @@ pub struct FrameResult {
     /// Points in the cloud.
     pub cloud_points: u32,
     init: Option<InitReport>,
+    record: FrameRecord,
 }
 
 #[wasm_bindgen]
@@ -197,6 +200,14 @@ impl FrameResult {
                 .map_err(js_err),
             None => Ok(JsValue::NULL),
         }
+    }
+    /// The frame's entry of the result JSON (`frame` is renumbered when the
+    /// file is made by `resultFile`).
+    #[wasm_bindgen(getter)]
+    pub fn record(&self) -> Result<JsValue, JsError> {
+        self.record
+            .serialize(&serde_wasm_bindgen::Serializer::json_compatible())
+            .map_err(js_err)
     }
     /// The rope-finding report in words, on a frame where the rope was found.
     #[wasm_bindgen(getter, js_name = initText)]
@@ -302,6 +313,7 @@ impl WasmTracker {
         let frame = Frame::new(width, height, rgb, depth, depth_scale).map_err(js_err)?;
         let rects = rects_of(occlusions)?;
         let timed = run_frame(&mut self.tracker, &frame, &rects, &mut now_ms).map_err(js_err)?;
+        let record = frame_record(0, &timed);
         let (obs, out) = (timed.observation, timed.output);
         let nodes_px = project_all(self.tracker.camera(), &out.nodes);
         let (status, reason) = match &out.status {
@@ -322,6 +334,7 @@ impl WasmTracker {
             total_ms: timed.total_ms,
             cloud_points: obs.cloud.len() as u32,
             init: out.init.clone(),
+            record,
         };
         self.last_obs = Some(obs);
         self.last = Some(out);
