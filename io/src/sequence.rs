@@ -23,10 +23,7 @@ pub const MAX_OCCLUSIONS: usize = 10_000;
 /// Largest JSON file read, bytes.
 pub const MAX_JSON_BYTES: usize = 64 * 1024 * 1024;
 
-/// Default metres per depth unit.
-pub const DEFAULT_DEPTH_SCALE: f64 = 0.001;
-/// Default frame rate.
-pub const DEFAULT_FPS: f64 = 30.0;
+pub use upetrack::perception::camera::{DEFAULT_DEPTH_SCALE, DEFAULT_FPS};
 /// Colour folder names accepted, in order of preference.
 pub const COLOR_DIRS: [&str; 3] = ["color", "rgb", "image"];
 

@@ -7,7 +7,8 @@
 //! never read whole), the containers [`rosbag1`] (index, chunks, lz4 and
 //! bz2) and [`rosbag2`] (over [`sqlite`], a read-only page reader), seen as
 //! one by [`store`]; [`ros_msgs`] (ROS1 and CDR messages), [`pixels`] (raw
-//! and compressed images), [`recording`] (which topics are the colour and
+//! and compressed images, decoded by [`images`], the project's one PNG and
+//! JPEG path), [`recording`] (which topics are the colour and
 //! depth streams, their intrinsics and extrinsics), [`pairing`] (colour and
 //! depth by time) and [`align`] (depth into the colour camera, as
 //! librealsense's `rs2::align`). The tracker's core knows none of this.
@@ -16,6 +17,7 @@ pub mod align;
 pub mod bytes;
 pub mod chunks;
 pub mod error;
+pub mod images;
 pub mod mcap;
 pub mod pairing;
 pub mod pixels;

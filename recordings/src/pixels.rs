@@ -4,6 +4,7 @@
 //! against its stream's size before decoding.
 
 use crate::error::RecordingError;
+use crate::images::{self, is_jpeg, is_png, ImageError, Pixels, SizeLimit};
 use crate::ros_msgs::{self, Wire};
 
 const COLOR_ENCODINGS: &str =
@@ -11,8 +12,6 @@ const COLOR_ENCODINGS: &str =
 const DEPTH_ENCODINGS: &str = "depth streams: mono16, 16UC1, 32FC1, or compressedDepth PNG";
 /// Bytes before the PNG of a `compressedDepth` message (format and two depth parameters).
 pub const COMPRESSED_DEPTH_HEADER: usize = 12;
-const PNG_MAGIC: &[u8] = b"\x89PNG\r\n\x1a\n";
-const JPEG_MAGIC: &[u8] = &[0xff, 0xd8, 0xff];
 
 /// How an image topic's messages carry their pixels.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -77,53 +76,19 @@ fn rows<'a>(
     Ok((0..e.height as usize).map(move |y| &data[y * step..y * step + row]))
 }
 
-/// A PNG's pixels as 8-bit channels (`channels` each) or 16-bit values.
-struct Png {
-    channels: usize,
-    sixteen: bool,
-    data: Vec<u8>,
-}
-
-fn decode_png(bytes: &[u8], e: &Expect<'_>) -> Result<Png, RecordingError> {
-    let err = |m: String| RecordingError::message(e.topic, format!("PNG: {m}"));
-    let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
-    decoder.set_transformations(png::Transformations::EXPAND);
-    let mut reader = decoder.read_info().map_err(|x| err(x.to_string()))?;
-    let info = reader.info();
-    e.size(info.width, info.height)?;
-    let size = reader
-        .output_buffer_size()
-        .ok_or_else(|| err("too large".into()))?;
-    let mut data = vec![0u8; size];
-    let frame = reader
-        .next_frame(&mut data)
-        .map_err(|x| err(x.to_string()))?;
-    data.truncate(frame.buffer_size());
-    Ok(Png {
-        channels: frame.color_type.samples(),
-        sixteen: frame.bit_depth == png::BitDepth::Sixteen,
-        data,
-    })
-}
-
-fn decode_jpeg(bytes: &[u8], e: &Expect<'_>) -> Result<Vec<u8>, RecordingError> {
-    use zune_core::colorspace::ColorSpace;
-    use zune_core::options::DecoderOptions;
-    let err = |m: String| RecordingError::message(e.topic, format!("JPEG: {m}"));
-    let options = DecoderOptions::default()
-        .jpeg_set_out_colorspace(ColorSpace::RGB)
-        .set_strict_mode(true)
-        .set_max_width(e.width as usize)
-        .set_max_height(e.height as usize);
-    let mut d = zune_jpeg::JpegDecoder::new_with_options(std::io::Cursor::new(bytes), options);
-    d.decode_headers().map_err(|x| err(format!("{x:?}")))?;
-    let (w, h) = d.dimensions().ok_or_else(|| err("no size".into()))?;
-    e.size(w as u32, h as u32)?;
-    let data = d.decode().map_err(|x| err(format!("{x:?}")))?;
-    if data.len() != e.pixels() * 3 {
-        return Err(err(format!("decoded {} bytes for {w}x{h} RGB", data.len())));
-    }
-    Ok(data)
+/// `bytes` decoded by [`images`], required to be `e`'s size.
+fn decode(
+    bytes: &[u8],
+    e: &Expect<'_>,
+    decode: fn(&[u8], SizeLimit) -> Result<Pixels, ImageError>,
+) -> Result<Pixels, RecordingError> {
+    let limit = SizeLimit {
+        width: e.width,
+        height: e.height,
+    };
+    let p = decode(bytes, limit).map_err(|x| RecordingError::message(e.topic, x.to_string()))?;
+    e.size(p.width, p.height)?;
+    Ok(p)
 }
 
 /// RGB8 pixels of a colour message.
@@ -135,33 +100,17 @@ pub fn color(
 ) -> Result<Vec<u8>, RecordingError> {
     if payload == Payload::Compressed {
         let im = ros_msgs::compressed_image(raw, wire, e.topic)?;
-        if im.data.starts_with(JPEG_MAGIC) {
-            return decode_jpeg(im.data, e);
+        if is_jpeg(im.data) {
+            return Ok(decode(im.data, e, images::decode_jpeg)?.data);
         }
-        if !im.data.starts_with(PNG_MAGIC) {
+        if !is_png(im.data) {
             return Err(RecordingError::UnsupportedEncoding {
                 topic: e.topic.to_string(),
                 encoding: im.format,
                 supported: COLOR_ENCODINGS,
             });
         }
-        let png = decode_png(im.data, e)?;
-        if png.sixteen {
-            return Err(RecordingError::UnsupportedEncoding {
-                topic: e.topic.to_string(),
-                encoding: format!("{} (16-bit PNG)", im.format),
-                supported: COLOR_ENCODINGS,
-            });
-        }
-        let c = png.channels;
-        let mut out = Vec::with_capacity(e.pixels() * 3);
-        for px in png.data.chunks_exact(c) {
-            match c {
-                1 | 2 => out.extend([px[0]; 3]),
-                _ => out.extend(&px[..3]),
-            }
-        }
-        return Ok(out);
+        return Ok(decode(im.data, e, images::decode_png)?.to_rgb8());
     }
     let im = ros_msgs::image(raw, wire, e.topic)?;
     // Source channel of R, G, B and the bytes a pixel.
@@ -212,25 +161,19 @@ pub fn depth(
         };
         // compressedDepth puts its parameters before the PNG; 32-bit depth
         // there is quantised inverse depth, which is not read.
-        let png_bytes = if im.data.starts_with(PNG_MAGIC) {
+        let png_bytes = if is_png(im.data) {
             im.data
         } else if im.format.starts_with("16UC1") || im.format.starts_with("mono16") {
             im.data
                 .get(COMPRESSED_DEPTH_HEADER..)
-                .filter(|b| b.starts_with(PNG_MAGIC))
+                .filter(|b| is_png(b))
                 .ok_or_else(unsupported)?
         } else {
             return Err(unsupported());
         };
-        let png = decode_png(png_bytes, e)?;
-        if !png.sixteen || png.channels != 1 {
-            return Err(unsupported());
-        }
-        return Ok(png
-            .data
-            .chunks_exact(2)
-            .map(|b| u16::from_be_bytes([b[0], b[1]]))
-            .collect());
+        return decode(png_bytes, e, images::decode_png)?
+            .to_u16()
+            .ok_or_else(unsupported);
     }
     let im = ros_msgs::image(raw, wire, e.topic)?;
     let mut out = Vec::with_capacity(e.pixels());

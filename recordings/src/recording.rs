@@ -15,12 +15,12 @@ use crate::pixels::{self, Expect, Payload};
 use crate::ros_msgs::{self, CameraInfo, Wire};
 use crate::store::{Msg, Store};
 
-/// Largest image side, pixels (a D435i streams at most 1920x1080).
-pub const MAX_IMAGE_SIDE: u32 = 8192;
-/// Depth units of a recording that does not say, metres (the D435i's default).
-pub const DEFAULT_DEPTH_UNITS: f64 = 0.001;
-/// Frame rate assumed when neither the recording nor its timestamps give one.
-pub const DEFAULT_FPS: f64 = 30.0;
+// The project's one definition of each: the largest image side, the depth
+// units of a recording that does not say (metres) and the frame rate
+// assumed when neither the recording nor its timestamps give one.
+pub use upetrack::perception::camera::{
+    DEFAULT_DEPTH_SCALE as DEFAULT_DEPTH_UNITS, DEFAULT_FPS, MAX_IMAGE_SIDE,
+};
 const IMAGE_TYPE: &str = "sensor_msgs/Image";
 const COMPRESSED_TYPE: &str = "sensor_msgs/CompressedImage";
 const STRING_TYPE: &str = "std_msgs/String";

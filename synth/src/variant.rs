@@ -18,6 +18,22 @@ pub const D435I_1280X720: CameraIntrinsics = CameraIntrinsics {
     cy: 360.0,
 };
 
+/// Rope albedos of the variants, RGB in [0, 1].
+const BLUE: [f64; 3] = [0.08, 0.22, 0.55];
+const RED: [f64; 3] = [0.62, 0.07, 0.06];
+const GREEN: [f64; 3] = [0.10, 0.45, 0.15];
+const ORANGE: [f64; 3] = [0.85, 0.42, 0.05];
+const DARK_BLUE: [f64; 3] = [0.06, 0.12, 0.45];
+
+/// The variants' rope colours by name (the page's scene maker offers them).
+pub const ROPE_COLOURS: [(&str, [f64; 3]); 5] = [
+    ("blue", BLUE),
+    ("red", RED),
+    ("green", GREEN),
+    ("orange", ORANGE),
+    ("dark blue", DARK_BLUE),
+];
+
 /// One way of seeing a scenario.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Variant {
@@ -52,7 +68,7 @@ impl Variant {
         distance: 0.6,
         rope_diameter: 0.015,
         rope_length: 0.8,
-        rope_color: [0.08, 0.22, 0.55],
+        rope_color: BLUE,
         table_color: [0.86, 0.87, 0.85],
     };
 
@@ -82,7 +98,7 @@ impl Variant {
             distance: 0.7,
             rope_diameter: 0.012,
             rope_length: 0.8,
-            rope_color: [0.62, 0.07, 0.06],
+            rope_color: RED,
             table_color: [0.78, 0.64, 0.45],
         },
         Self {
@@ -94,7 +110,7 @@ impl Variant {
             distance: 0.45,
             rope_diameter: 0.006,
             rope_length: 0.5,
-            rope_color: [0.10, 0.45, 0.15],
+            rope_color: GREEN,
             table_color: [0.60, 0.61, 0.62],
         },
         Self {
@@ -106,7 +122,7 @@ impl Variant {
             distance: 0.95,
             rope_diameter: 0.020,
             rope_length: 0.8,
-            rope_color: [0.85, 0.42, 0.05],
+            rope_color: ORANGE,
             table_color: [0.30, 0.31, 0.33],
         },
         Self {
@@ -117,7 +133,7 @@ impl Variant {
             distance: 0.8,
             rope_diameter: 0.005,
             rope_length: 0.8,
-            rope_color: [0.06, 0.12, 0.45],
+            rope_color: DARK_BLUE,
             table_color: [0.92, 0.92, 0.90],
         },
         Self::DESK_BLACK_CABLE,

@@ -15,14 +15,8 @@ use crate::{js_err, to_js};
 /// Most frames the page generates at once (about 270 KB each in memory).
 pub const MAX_SCENE_FRAMES: usize = 600;
 
-/// Rope colours offered, RGB albedo in [0, 1] (those of the scene variants).
-pub const ROPE_COLOURS: [(&str, [f64; 3]); 5] = [
-    ("blue", [0.08, 0.22, 0.55]),
-    ("red", [0.62, 0.07, 0.06]),
-    ("green", [0.10, 0.45, 0.15]),
-    ("orange", [0.85, 0.42, 0.05]),
-    ("dark blue", [0.06, 0.12, 0.45]),
-];
+/// Rope colours offered: the scene variants' own.
+pub use upetrack_synth::variant::ROPE_COLOURS;
 
 /// What the page asks for.
 #[derive(Deserialize)]

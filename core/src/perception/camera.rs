@@ -4,8 +4,13 @@
 use crate::math::{Vec2, Vec3};
 
 /// Largest accepted image width or height in pixels. Checked before any
-/// per-pixel buffer is allocated.
+/// per-pixel buffer is allocated (every reader of the project uses this one).
 pub const MAX_IMAGE_SIDE: u32 = 8192;
+/// Metres per depth unit when nothing says otherwise: a RealSense D4xx's
+/// default depth units (1 mm).
+pub const DEFAULT_DEPTH_SCALE: f64 = 0.001;
+/// Frames per second when nothing says otherwise (a D435i's default rate).
+pub const DEFAULT_FPS: f64 = 30.0;
 
 /// Errors in camera intrinsics.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
