@@ -558,4 +558,46 @@ mod tests {
         // K = M + (P - M) mod (U - 4) fits: 1792 bytes on the page.
         assert_eq!(db.local_size(100_000), 1792);
     }
+
+    #[test]
+    fn a_value_above_its_cap_is_refused_before_a_page_is_read() {
+        // No pages at all: only the caps can answer.
+        let mut db = Database {
+            src: Vec::new(),
+            page_size: 4096,
+            usable: 4096,
+            pages: 0,
+        };
+        let at = RowRef {
+            rowid: 1,
+            page: 1,
+            cell: 0,
+        };
+        assert!(matches!(
+            db.payload(at, 0, MAX_VALUE_BYTES + 1),
+            Err(RecordingError::TooLarge { .. })
+        ));
+        let name = Value::Bytes {
+            offset: 0,
+            len: MAX_SCHEMA_TEXT_BYTES + 1,
+            text: true,
+        };
+        assert!(matches!(
+            db.text(at, &name, MAX_SCHEMA_TEXT_BYTES),
+            Err(RecordingError::TooLarge { .. })
+        ));
+        // Within the cap, the page is read (and here is missing).
+        assert!(matches!(
+            db.payload(at, 0, 8),
+            Err(RecordingError::Corrupt { .. })
+        ));
+    }
+
+    #[test]
+    fn a_page_set_marks_each_page_once() {
+        let mut s = PageSet::new(100);
+        assert!(s.insert(1) && s.insert(64) && s.insert(100));
+        assert!(!s.insert(64));
+        assert!(!s.insert(1_000), "a page past the file is never new");
+    }
 }

@@ -249,3 +249,153 @@ fn corrupt_chunk_is_an_error_naming_its_offset_not_a_panic() {
         );
     }
 }
+
+/// A file of `len` bytes whose first bytes are `head` and the rest zeros,
+/// never held: a cap on a size the file must contain is reached without
+/// writing hundreds of MB.
+struct Sparse {
+    head: Vec<u8>,
+    len: u64,
+}
+
+impl upetrack_recordings::ByteSource for Sparse {
+    fn len(&self) -> u64 {
+        self.len
+    }
+
+    fn read_at(&mut self, offset: u64, buf: &mut [u8]) -> Result<(), RecordingError> {
+        upetrack_recordings::bytes::check_range(self.len, offset, buf.len())?;
+        for (k, b) in buf.iter_mut().enumerate() {
+            *b = usize::try_from(offset + k as u64)
+                .ok()
+                .and_then(|i| self.head.get(i))
+                .copied()
+                .unwrap_or(0);
+        }
+        Ok(())
+    }
+}
+
+/// A ROS1 bag record: header fields `name=value`, then `data_len` and `data`.
+fn bag_record(fields: &[(&str, &[u8])], data_len: u32, data: &[u8]) -> Vec<u8> {
+    let mut header = Vec::new();
+    for (name, value) in fields {
+        let field = [name.as_bytes(), b"=", value].concat();
+        header.extend((field.len() as u32).to_le_bytes());
+        header.extend(field);
+    }
+    let mut out = (header.len() as u32).to_le_bytes().to_vec();
+    out.extend(header);
+    out.extend(data_len.to_le_bytes());
+    out.extend(data);
+    out
+}
+
+/// `#ROSBAG V2.0` and a bag header without an index (so the bag is scanned).
+fn unindexed_bag() -> Vec<u8> {
+    let mut bag = b"#ROSBAG V2.0\n".to_vec();
+    bag.extend(bag_record(
+        &[("op", &[0x03]), ("index_pos", &0u64.to_le_bytes())],
+        0,
+        &[],
+    ));
+    bag
+}
+
+fn too_large(e: Result<Store<Sparse>, RecordingError>) -> &'static str {
+    match e {
+        Err(RecordingError::TooLarge { what, .. }) => what,
+        Err(e) => panic!("another error: {e}"),
+        Ok(s) => panic!("opened, with {} messages", s.messages.len()),
+    }
+}
+
+#[test]
+fn bag_record_header_above_its_cap_is_refused_before_it_is_read() {
+    let mut head = b"#ROSBAG V2.0\n".to_vec();
+    let huge = upetrack_recordings::rosbag1::MAX_HEADER_BYTES + 1;
+    head.extend(huge.to_le_bytes());
+    let src = Sparse {
+        head,
+        len: 64 << 20,
+    };
+    assert!(too_large(Store::open(src)).contains("record header"));
+}
+
+#[test]
+fn bag_chunk_above_its_cap_is_refused_before_it_is_read() {
+    let mut head = unindexed_bag();
+    let huge = upetrack_recordings::rosbag1::MAX_CHUNK_DATA_BYTES + 1;
+    head.extend(bag_record(
+        &[
+            ("op", &[0x05]),
+            ("compression", b"none"),
+            ("size", &huge.to_le_bytes()),
+        ],
+        huge,
+        &[],
+    ));
+    let len = head.len() as u64 + u64::from(huge);
+    assert!(too_large(Store::open(Sparse { head, len })).contains("compressed chunk"));
+}
+
+#[test]
+fn bag_with_more_connections_than_its_cap_is_refused() {
+    let max = upetrack_recordings::rosbag1::MAX_CONNECTIONS as u32;
+    // A connection's data is header fields too: its message type.
+    let data = [&8u32.to_le_bytes()[..], b"type=a/B"].concat();
+    let mut head = unindexed_bag();
+    for id in 0..=max {
+        head.extend(bag_record(
+            &[
+                ("op", &[0x07]),
+                ("conn", &id.to_le_bytes()),
+                ("topic", b"/t"),
+            ],
+            data.len() as u32,
+            &data,
+        ));
+    }
+    let len = head.len() as u64;
+    assert!(too_large(Store::open(Sparse { head, len })).contains("connections"));
+}
+
+#[test]
+fn mcap_summary_record_above_its_cap_is_refused_before_it_is_read() {
+    let mut mcap = fixture("ros2_png.mcap");
+    let footer_at = mcap.len() - 8 - 29;
+    let start = u64::from_le_bytes(mcap[footer_at + 9..footer_at + 17].try_into().expect("8"));
+    let at = start as usize + 1;
+    let huge = upetrack_recordings::mcap::MAX_RECORD_BYTES + 1;
+    mcap[at..at + 8].copy_from_slice(&huge.to_le_bytes());
+    let len = mcap.len() as u64;
+    let e = Store::open(Sparse { head: mcap, len });
+    assert!(too_large(e).contains("MCAP record"));
+}
+
+#[test]
+fn sqlite_btree_deeper_than_any_real_one_is_refused() {
+    let mut db = fixture("librealsense.db3");
+    let (root, children) = messages_root(&db);
+    let size = page_range(&db, 1).len();
+    let first_new = db.len() / size + 1;
+    let depth = upetrack_recordings::sqlite::MAX_TREE_DEPTH + 2;
+    // A chain of interior pages, each with no cell and its right child the next.
+    for k in 0..depth {
+        let mut p = vec![0u8; size];
+        p[0] = 0x05;
+        let next = if k + 1 == depth {
+            children[0]
+        } else {
+            first_new + k + 1
+        };
+        p[8..12].copy_from_slice(&(next as u32).to_be_bytes());
+        db.extend(p);
+    }
+    let range = page_range(&db, root);
+    let p = &mut db[range];
+    p[3..5].copy_from_slice(&[0, 0]);
+    p[8..12].copy_from_slice(&(first_new as u32).to_be_bytes());
+    let text = corrupt_text(Store::open(db));
+    assert!(text.contains("deeper"), "{text}");
+}
