@@ -686,6 +686,25 @@ for (const [name, writer] of [['librealsense.bag', 'librealsense 2.55 .bag'], ['
   await page.close();
 });
 
+await test('hostile recordings on the page: a .db3 whose pages are shared is refused at once, one whose index repeats opens as the genuine one', async () => {
+  const dir = path.join(tmp, 'hostile');
+  execFileSync('python3', [path.join(root, 'scripts/hostile_recordings.py'), dir]);
+  const page = await newPage('?autoplay=0');
+  expectErrors(page);
+  const t0 = Date.now();
+  await page.setInputFiles('#recording', [path.join(dir, 'db3-fanout.db3'), path.join(recordings, 'reference/dlo.json')]);
+  await page.waitForFunction(() => !document.getElementById('message').hidden, null, { timeout: 30000 });
+  const m = await messageOf(page);
+  console.log(`     db3-fanout.db3 refused on the page in ${Date.now() - t0} ms (the command: under 0.01 s)`);
+  assert(m.includes('reached twice'), m);
+  await page.click('#message-close');
+  await page.setInputFiles('#recording', [path.join(dir, 'bag-dup-index.bag'), path.join(recordings, 'reference/dlo.json')]);
+  await page.waitForFunction(() => window.upetrack.state.seq && window.upetrack.state.seq.fromRecording && window.upetrack.state.tracked >= 0, null, { timeout: 30000 });
+  const frames = await page.evaluate(() => window.upetrack.state.seq.info.color_files.length);
+  assert(frames === 8, `${frames} frames`);
+  await page.close();
+});
+
 for (const name of ['ros_bz2.bag', 'ros2_png.db3', 'ros2_png.mcap']) await test(`a realsense-ros recording (${name}) without dlo.json: the rope colour is picked by a click, tracked, and saved as dlo.json`, async () => {
   const page = await newPage('?autoplay=0');
   await page.setInputFiles('#recording', path.join(recordings, name));
