@@ -206,13 +206,56 @@ mod tests {
         c.insert(1, vec![0; 8]);
         c.insert(2, vec![0; 8]);
         assert!(c.get(1).is_some() && c.get(2).is_some() && c.get(3).is_none());
+        // Filled to the cap exactly: nothing is dropped.
+        let half = CHUNK_CACHE_BYTES / 2;
+        let mut c = ChunkCache::default();
+        c.insert(1, vec![0; half - 8]);
+        c.insert(2, vec![0; 8]);
+        c.insert(3, vec![0; half]);
+        assert!(c.get(1).is_some() && c.get(2).is_some() && c.get(3).is_some());
+        // One byte more: the least recently used (1, as 2 and 3 were read
+        // after it) goes, and only it.
+        c.get(2);
+        c.get(3);
+        c.insert(4, vec![0; 1]);
+        assert!(c.get(1).is_none());
+        assert!(c.get(2).is_some() && c.get(3).is_some() && c.get(4).is_some());
+        // A chunk alone above the cap is still kept (the last one read).
+        c.insert(5, vec![0; CHUNK_CACHE_BYTES + 1]);
+        assert!(c.get(5).is_some() && c.get(4).is_none());
+    }
+
+    #[test]
+    fn a_chunk_of_exactly_the_largest_size_is_decompressed_not_refused() {
+        // Declared at the cap: decompressed (and found short), not refused.
+        assert!(matches!(
+            decompress("lz4", MAX_CHUNK_BYTES, &[0; 8], 5),
+            Err(RecordingError::Corrupt { .. })
+        ));
+    }
+
+    #[test]
+    fn a_stopped_scan_says_where_and_what_it_kept() {
+        let e = RecordingError::corrupt(120, "broken");
+        let w = scan_stopped(100, &e, 7);
+        assert!(
+            w.contains("byte 100") && w.contains("7 messages") && w.contains("broken"),
+            "{w}"
+        );
     }
 
     #[test]
     fn a_scan_decompresses_at_most_its_budget() {
         // A small file may always inflate one chunk of the largest size...
         let mut b = ScanBudget::for_file(1000);
-        assert!(b.spend(MAX_CHUNK_BYTES).is_ok());
+        assert!(b.spend(100).is_ok());
+        // The refusal reports all that the scan would have decompressed.
+        assert!(matches!(
+            b.spend(MAX_CHUNK_BYTES),
+            Err(RecordingError::TooLarge { size, max, .. })
+                if size == MAX_CHUNK_BYTES + 100 && max == MAX_CHUNK_BYTES
+        ));
+        assert!(b.spend(MAX_CHUNK_BYTES - 100).is_ok());
         assert!(matches!(b.spend(1), Err(RecordingError::TooLarge { .. })));
         // ...a large one MAX_EXPANSION times its size.
         let len = 100 * MAX_CHUNK_BYTES;

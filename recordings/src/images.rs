@@ -249,6 +249,59 @@ mod tests {
     }
 
     #[test]
+    fn an_image_at_the_limit_decodes_and_a_side_of_zero_is_empty() {
+        // 64x64 RGBA of 16 bits: 32 KB, exactly what a 64x64 limit allows.
+        let png = png_of(
+            64,
+            64,
+            png::ColorType::Rgba,
+            png::BitDepth::Sixteen,
+            &[7; 64 * 64 * 8],
+        );
+        let limit = SizeLimit {
+            width: 64,
+            height: 64,
+        };
+        assert_eq!(
+            decode_png(&png, limit).expect("at the limit").data.len(),
+            64 * 64 * 8
+        );
+        assert!(matches!(
+            check(0, 5, SizeLimit::ANY),
+            Err(ImageError::Empty { .. })
+        ));
+        assert!(matches!(
+            check(5, 0, SizeLimit::ANY),
+            Err(ImageError::Empty { .. })
+        ));
+        assert!(check(5, 5, SizeLimit::ANY).is_ok());
+    }
+
+    #[test]
+    fn a_jpeg_decodes_to_rgb_within_its_limit() {
+        let rgb: Vec<u8> = (0..8 * 6 * 3).map(|i| (i * 5 % 256) as u8).collect();
+        let mut jpeg = Vec::new();
+        jpeg_encoder::Encoder::new(&mut jpeg, 90)
+            .encode(&rgb, 8, 6, jpeg_encoder::ColorType::Rgb)
+            .expect("encoded");
+        assert!(is_jpeg(&jpeg) && !is_png(&jpeg));
+        let p = decode_jpeg(&jpeg, SizeLimit::ANY).expect("decoded");
+        assert_eq!(
+            (p.width, p.height, p.channels, p.data.len()),
+            (8, 6, 3, 8 * 6 * 3)
+        );
+        let small = SizeLimit {
+            width: 8,
+            height: 5,
+        };
+        assert!(decode_jpeg(&jpeg, small).is_err());
+        assert!(
+            decode_jpeg(&jpeg[..jpeg.len() / 2], SizeLimit::ANY).is_err(),
+            "strict: a cut file is refused"
+        );
+    }
+
+    #[test]
     fn sixteen_bit_samples_give_depth_and_their_high_byte_as_colour() {
         let data = [0x12, 0x34, 0xab, 0xcd];
         let png = png_of(
@@ -271,5 +324,17 @@ mod tests {
         let p = decode_png(&rgba, SizeLimit::ANY).expect("decoded");
         assert_eq!(p.to_rgb8(), [1, 2, 3]);
         assert_eq!(p.to_u16(), None);
+        // Eight-bit grey is no depth either.
+        let grey = png_of(
+            2,
+            1,
+            png::ColorType::Grayscale,
+            png::BitDepth::Eight,
+            &[9, 10],
+        );
+        assert_eq!(
+            decode_png(&grey, SizeLimit::ANY).expect("decoded").to_u16(),
+            None
+        );
     }
 }

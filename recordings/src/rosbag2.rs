@@ -19,6 +19,8 @@ pub const MAX_TOPICS: usize = 65_536;
 pub const MAX_TOPIC_TEXT_BYTES: u64 = 64 << 10;
 /// Largest decompressed message, bytes.
 pub const MAX_MESSAGE_BYTES: u64 = 256 << 20;
+// The cap holds real messages: a 1920x1080 RGB8 image with its header.
+const _: () = assert!(MAX_MESSAGE_BYTES > 1920 * 1080 * 3 + 1024);
 
 /// One topic.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -162,23 +164,58 @@ impl<R: ByteSource> Rosbag2<R> {
     pub fn read(&mut self, m: &Message) -> Result<Vec<u8>, RecordingError> {
         let b = m.blob;
         let data = self.db.payload(b.row, b.offset, b.len)?;
-        if !data.starts_with(&ZSTD_MAGIC) {
-            return Ok(data);
-        }
-        use std::io::Read;
-        let mut out = Vec::new();
-        ruzstd::decoding::StreamingDecoder::new(data.as_slice())
-            .map_err(|e| RecordingError::corrupt(0, format!("zstd message: {e}")))?
-            .take(MAX_MESSAGE_BYTES + 1)
-            .read_to_end(&mut out)
-            .map_err(|e| RecordingError::corrupt(0, format!("zstd message: {e}")))?;
-        if out.len() as u64 > MAX_MESSAGE_BYTES {
-            return Err(RecordingError::TooLarge {
-                what: "decompressed message in bytes",
-                size: out.len() as u64,
-                max: MAX_MESSAGE_BYTES,
-            });
-        }
-        Ok(out)
+        message_bytes(data, MAX_MESSAGE_BYTES)
+    }
+}
+
+/// A stored message as its bytes: `data` itself, or its zstd frame
+/// decompressed to at most `max` bytes (rosbag2's per-message compression).
+fn message_bytes(data: Vec<u8>, max: u64) -> Result<Vec<u8>, RecordingError> {
+    if !data.starts_with(&ZSTD_MAGIC) {
+        return Ok(data);
+    }
+    use std::io::Read;
+    let mut out = Vec::new();
+    ruzstd::decoding::StreamingDecoder::new(data.as_slice())
+        .map_err(|e| RecordingError::corrupt(0, format!("zstd message: {e}")))?
+        .take(max + 1)
+        .read_to_end(&mut out)
+        .map_err(|e| RecordingError::corrupt(0, format!("zstd message: {e}")))?;
+    if out.len() as u64 > max {
+        return Err(RecordingError::TooLarge {
+            what: "decompressed message in bytes",
+            size: out.len() as u64,
+            max,
+        });
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_zstd_message_decompresses_up_to_its_cap_and_no_further() {
+        let plain: Vec<u8> = (0..1000u32).map(|i| (i % 7) as u8).collect();
+        let packed = ruzstd::encoding::compress_to_vec(
+            plain.as_slice(),
+            ruzstd::encoding::CompressionLevel::Fastest,
+        );
+        assert!(packed.starts_with(&ZSTD_MAGIC));
+        assert_eq!(
+            message_bytes(packed.clone(), 1000).expect("at the cap"),
+            plain
+        );
+        assert!(matches!(
+            message_bytes(packed, 999),
+            Err(RecordingError::TooLarge {
+                size: 1000,
+                max: 999,
+                ..
+            })
+        ));
+        // A message that is not compressed is handed back as it is.
+        assert_eq!(message_bytes(vec![1, 2, 3], 0).expect("plain"), [1, 2, 3]);
     }
 }

@@ -510,6 +510,8 @@ mod tests {
         let nine = [0xff; 9];
         assert_eq!(varint(&nine, 0, 0).ok(), Some((u64::MAX, 9)));
         assert!(varint(&[0x81], 0, 0).is_err());
+        // Read where it starts, not from the page's start.
+        assert_eq!(varint(&[0x7f, 0x82, 0x01], 1, 0).ok(), Some((257, 2)));
     }
 
     #[test]

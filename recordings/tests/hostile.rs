@@ -373,18 +373,18 @@ fn mcap_summary_record_above_its_cap_is_refused_before_it_is_read() {
     assert!(too_large(e).contains("MCAP record"));
 }
 
-#[test]
-fn sqlite_btree_deeper_than_any_real_one_is_refused() {
+/// `librealsense.db3` with the `messages` root's children replaced by a
+/// chain of `chain` interior pages (no cells, each the next's parent) over
+/// the first leaf: that leaf then lies at depth `chain + 1`.
+fn db3_with_chain(chain: usize) -> Vec<u8> {
     let mut db = fixture("librealsense.db3");
     let (root, children) = messages_root(&db);
     let size = page_range(&db, 1).len();
     let first_new = db.len() / size + 1;
-    let depth = upetrack_recordings::sqlite::MAX_TREE_DEPTH + 2;
-    // A chain of interior pages, each with no cell and its right child the next.
-    for k in 0..depth {
+    for k in 0..chain {
         let mut p = vec![0u8; size];
         p[0] = 0x05;
-        let next = if k + 1 == depth {
+        let next = if k + 1 == chain {
             children[0]
         } else {
             first_new + k + 1
@@ -396,6 +396,84 @@ fn sqlite_btree_deeper_than_any_real_one_is_refused() {
     let p = &mut db[range];
     p[3..5].copy_from_slice(&[0, 0]);
     p[8..12].copy_from_slice(&(first_new as u32).to_be_bytes());
-    let text = corrupt_text(Store::open(db));
+    db
+}
+
+#[test]
+fn sqlite_btree_deeper_than_any_real_one_is_refused() {
+    let max = upetrack_recordings::sqlite::MAX_TREE_DEPTH;
+    // A leaf at the deepest depth taken is read...
+    let store = Store::open(db3_with_chain(max - 1)).expect("as deep as taken");
+    assert!(!store.messages.is_empty());
+    // ...one level deeper is refused.
+    let text = corrupt_text(Store::open(db3_with_chain(max)));
     assert!(text.contains("deeper"), "{text}");
+}
+
+#[test]
+fn sqlite_value_read_from_any_offset_equals_the_slice_of_the_whole() {
+    use upetrack_recordings::sqlite::{column_names, Database, Value};
+    let mut db = Database::open(fixture("librealsense.db3")).expect("opens");
+    let (root, sql) = db
+        .tables()
+        .expect("schema")
+        .into_iter()
+        .find(|t| t.0 == "messages")
+        .map(|t| (t.1, t.2))
+        .expect("messages table");
+    let data = column_names(&sql)
+        .iter()
+        .position(|c| c == "data")
+        .expect("data column");
+    // The longest blob: an image, over many overflow pages.
+    let mut longest = None;
+    db.for_each_row(root, |_, row| {
+        if let Some(Value::Bytes { offset, len, .. }) = row.values.get(data).cloned() {
+            if longest.as_ref().is_none_or(|(_, _, l)| len > *l) {
+                longest = Some((row.at, offset, len));
+            }
+        }
+        Ok(())
+    })
+    .expect("rows");
+    let (at, offset, len) = longest.expect("a blob");
+    assert!(len > 50_000, "{len} bytes");
+    let whole = db.payload(at, offset, len).expect("whole");
+    // Windows that start on the leaf, in the first overflow page, and far
+    // down the chain (whose pages before it are skipped unread).
+    for (from, n) in [(0u64, 10u64), (3000, 5000), (len / 2, 4000), (len - 7, 7)] {
+        let part = db.payload(at, offset + from, n).expect("part");
+        assert_eq!(
+            part,
+            whole[from as usize..(from + n) as usize],
+            "from {from}"
+        );
+    }
+    // `data` is the row's last column: a read past it runs past the payload.
+    assert!(db.payload(at, offset + len - 1, 2).is_err());
+}
+
+#[test]
+fn sqlite_header_of_an_impossible_page_size_or_encoding_is_refused() {
+    use upetrack_recordings::sqlite::Database;
+    let genuine = fixture("librealsense.db3");
+    let with = |at: usize, bytes: &[u8]| {
+        let mut db = genuine.clone();
+        db[at..at + bytes.len()].copy_from_slice(bytes);
+        Database::open(db).err().map(|e| e.to_string())
+    };
+    assert!(with(16, &[0x10, 0x00]).is_none(), "4096: the fixture's own");
+    for bad in [[0x03, 0xe8], [0x01, 0x00], [0x00, 0x00], [0xff, 0xff]] {
+        let e = with(16, &bad).expect("refused");
+        assert!(e.contains("page size"), "{bad:?}: {e}");
+    }
+    // Reserved space leaving fewer than 480 usable bytes of a 512-byte page.
+    let mut small = genuine.clone();
+    small[16..18].copy_from_slice(&[0x02, 0x00]);
+    small[20] = 33;
+    assert!(Database::open(small.clone()).is_err());
+    small[20] = 32;
+    assert!(Database::open(small).is_ok(), "480 usable bytes are enough");
+    assert!(with(56, &[0, 0, 0, 2]).expect("UTF-16").contains("UTF-8"));
+    assert!(with(56, &[0, 0, 0, 1]).is_none());
 }
