@@ -341,13 +341,13 @@ impl<R: ByteSource> Database<R> {
             RecordingError::corrupt(base + c as u64, "overflow pointer past the page")
         })?;
         let mut pos = local;
-        let mut hops = 0u64;
+        // Each overflow page at most once: a chain that loops is corrupt.
+        let mut seen = PageSet::new(self.pages);
         while pos < end {
-            hops += 1;
-            if next == 0 || hops > u64::from(self.pages) {
+            if next == 0 || !seen.insert(next) {
                 return Err(RecordingError::corrupt(
                     base + c as u64,
-                    "overflow chain ends early or loops",
+                    "overflow chain ends early, leaves the file or loops",
                 ));
             }
             let here = pos;
@@ -543,6 +543,9 @@ mod tests {
     fn column_names_of_rosbag2_tables() {
         let sql = "CREATE TABLE messages(id INTEGER PRIMARY KEY,topic_id INTEGER NOT NULL,timestamp INTEGER NOT NULL, data BLOB NOT NULL)";
         assert_eq!(column_names(sql), ["id", "topic_id", "timestamp", "data"]);
+        // Names quoted in each of SQLite's ways.
+        let quoted = "CREATE TABLE t(\"a\" INTEGER, `b` TEXT, [c] BLOB, d)";
+        assert_eq!(column_names(quoted), ["a", "b", "c", "d"]);
     }
 
     #[test]
@@ -588,9 +591,18 @@ mod tests {
             db.text(at, &name, MAX_SCHEMA_TEXT_BYTES),
             Err(RecordingError::TooLarge { .. })
         ));
-        // Within the cap, the page is read (and here is missing).
+        // At the cap, the page is read (and here is missing).
         assert!(matches!(
-            db.payload(at, 0, 8),
+            db.payload(at, 0, MAX_VALUE_BYTES),
+            Err(RecordingError::Corrupt { .. })
+        ));
+        let at_cap = Value::Bytes {
+            offset: 0,
+            len: MAX_SCHEMA_TEXT_BYTES,
+            text: true,
+        };
+        assert!(matches!(
+            db.text(at, &at_cap, MAX_SCHEMA_TEXT_BYTES),
             Err(RecordingError::Corrupt { .. })
         ));
     }

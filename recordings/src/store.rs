@@ -226,3 +226,18 @@ impl<R: ByteSource> Store<R> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_container_is_told_by_its_first_bytes() {
+        assert!(is_container(b"#ROSBAG V2.0\n"));
+        assert!(is_container(b"SQLite format 3\0"));
+        assert!(is_container(b"\x89MCAP0\r\n"));
+        assert!(!is_container(b"#ROSBAG V1.2\n"));
+        assert!(!is_container(b"PK\x03\x04"));
+        assert!(!is_container(b""));
+    }
+}

@@ -451,6 +451,38 @@ fn sqlite_value_read_from_any_offset_equals_the_slice_of_the_whole() {
     }
     // `data` is the row's last column: a read past it runs past the payload.
     assert!(db.payload(at, offset + len - 1, 2).is_err());
+
+    // The blob's overflow chain made a loop (its first overflow page naming
+    // itself): refused, never read round and round.
+    let mut bytes = fixture("librealsense.db3");
+    let size = page_range(&bytes, 1).len();
+    let cell = (at.page as usize - 1) * size + at.cell as usize;
+    let varint = |b: &[u8], mut p: usize| {
+        let mut v = 0u64;
+        for _ in 0..9 {
+            let x = b[p];
+            p += 1;
+            v = (v << 7) | u64::from(x & 0x7f);
+            if x & 0x80 == 0 {
+                break;
+            }
+        }
+        (v, p)
+    };
+    let (total, p) = varint(&bytes, cell);
+    let (_, start) = varint(&bytes, p);
+    // SQLite's on-page share of a payload of `total` bytes (usable = page size here).
+    let u = size as u64;
+    let (x, m) = (u - 35, (u - 12) * 32 / 255 - 23);
+    let k = m + (total - m) % (u - 4);
+    let local = if k <= x { k } else { m } as usize;
+    let ptr = start + local;
+    let first = u32::from_be_bytes(bytes[ptr..ptr + 4].try_into().expect("4 bytes"));
+    let first_at = (first as usize - 1) * size;
+    bytes[first_at..first_at + 4].copy_from_slice(&first.to_be_bytes());
+    let mut looped = Database::open(bytes).expect("opens");
+    let e = looped.payload(at, offset, len).expect_err("a loop");
+    assert!(e.to_string().contains("loops"), "{e}");
 }
 
 #[test]
