@@ -93,3 +93,85 @@ pub fn decode_depth(bytes: &[u8], path: &str) -> Result<DepthImage, SequenceErro
         data,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn png_of(
+        width: u32,
+        height: u32,
+        color: png::ColorType,
+        depth: png::BitDepth,
+        data: &[u8],
+    ) -> Vec<u8> {
+        let mut out = Vec::new();
+        let mut e = png::Encoder::new(&mut out, width, height);
+        e.set_color(color);
+        e.set_depth(depth);
+        let mut w = e.write_header().expect("header");
+        w.write_image_data(data).expect("data");
+        w.finish().expect("finish");
+        out
+    }
+
+    #[test]
+    fn depth_is_a_16_bit_grey_png_and_nothing_else() {
+        let depth = png_of(
+            2,
+            1,
+            png::ColorType::Grayscale,
+            png::BitDepth::Sixteen,
+            &[1, 2, 3, 4],
+        );
+        let d = decode_depth(&depth, "d.png").expect("depth");
+        assert_eq!((d.width, d.height, d.data), (2, 1, vec![0x0102, 0x0304]));
+        let grey8 = png_of(
+            2,
+            1,
+            png::ColorType::Grayscale,
+            png::BitDepth::Eight,
+            &[1, 2],
+        );
+        let e = decode_depth(&grey8, "g.png")
+            .expect_err("8-bit")
+            .to_string();
+        assert!(
+            e.contains("g.png") && e.contains("16-bit single-channel"),
+            "{e}"
+        );
+        let e = decode_depth(&[0xff, 0xd8, 0xff, 0xe0], "j.jpg")
+            .expect_err("a JPEG")
+            .to_string();
+        assert!(e.contains("not a PNG file"), "{e}");
+    }
+
+    #[test]
+    fn colour_of_any_png_kind_is_rgb8() {
+        let rgb = png_of(
+            1,
+            1,
+            png::ColorType::Rgb,
+            png::BitDepth::Eight,
+            &[10, 20, 30],
+        );
+        assert_eq!(decode_color(&rgb, "c.png").expect("rgb").data, [10, 20, 30]);
+        let rgb16 = png_of(
+            1,
+            1,
+            png::ColorType::Rgb,
+            png::BitDepth::Sixteen,
+            &[10, 1, 20, 2, 30, 3],
+        );
+        assert_eq!(
+            decode_color(&rgb16, "c.png").expect("rgb16").data,
+            [10, 20, 30]
+        );
+        let grey = png_of(1, 1, png::ColorType::Grayscale, png::BitDepth::Eight, &[7]);
+        assert_eq!(decode_color(&grey, "c.png").expect("grey").data, [7, 7, 7]);
+        let e = decode_color(b"GIF89a", "c.gif")
+            .expect_err("a GIF")
+            .to_string();
+        assert!(e.contains("not a PNG or JPEG"), "{e}");
+    }
+}

@@ -108,5 +108,6 @@ mod tests {
         assert!(matches!(input_kind(b"#ROSBAG V1.2\n"), InputKind::Other(w) if w.contains("1.2")));
         assert!(matches!(input_kind(b"  {\"a\": 1}"), InputKind::Other(w) if w.contains("JSON")));
         assert!(matches!(input_kind(b"hello"), InputKind::Other(w) if w.contains("no kind")));
+        assert!(matches!(input_kind(&[0x1f, 0x8b, 8]), InputKind::Other(w) if w.contains("gzip")));
     }
 }
