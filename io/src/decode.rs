@@ -60,11 +60,7 @@ pub fn decode_color(bytes: &[u8], path: &str) -> Result<RgbImage, SequenceError>
     Ok(RgbImage {
         width: pixels.width,
         height: pixels.height,
-        data: if pixels.channels == 3 && !pixels.sixteen {
-            pixels.data
-        } else {
-            pixels.to_rgb8()
-        },
+        data: pixels.into_rgb8(),
     })
 }
 
@@ -105,14 +101,7 @@ mod tests {
         depth: png::BitDepth,
         data: &[u8],
     ) -> Vec<u8> {
-        let mut out = Vec::new();
-        let mut e = png::Encoder::new(&mut out, width, height);
-        e.set_color(color);
-        e.set_depth(depth);
-        let mut w = e.write_header().expect("header");
-        w.write_image_data(data).expect("data");
-        w.finish().expect("finish");
-        out
+        crate::write::encode_png(width, height, color, depth, data).expect("encoded")
     }
 
     #[test]

@@ -32,7 +32,8 @@ pub fn encode_jpeg(
     Ok(out)
 }
 
-fn encode_png(
+/// Encodes `data` as a PNG of `color` and `depth`.
+pub(crate) fn encode_png(
     width: u32,
     height: u32,
     color: png::ColorType,

@@ -104,6 +104,15 @@ impl Pixels {
         out
     }
 
+    /// [`Pixels::to_rgb8`], without a copy when the pixels already are RGB8.
+    pub fn into_rgb8(self) -> Vec<u8> {
+        if self.channels == 3 && !self.sixteen {
+            self.data
+        } else {
+            self.to_rgb8()
+        }
+    }
+
     /// The values of a 16-bit single-channel image (depth), or `None` for
     /// any other kind.
     pub fn to_u16(&self) -> Option<Vec<u16>> {

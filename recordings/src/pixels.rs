@@ -110,7 +110,7 @@ pub fn color(
                 supported: COLOR_ENCODINGS,
             });
         }
-        return Ok(decode(im.data, e, images::decode_png)?.to_rgb8());
+        return Ok(decode(im.data, e, images::decode_png)?.into_rgb8());
     }
     let im = ros_msgs::image(raw, wire, e.topic)?;
     // Source channel of R, G, B and the bytes a pixel.

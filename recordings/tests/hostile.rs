@@ -138,6 +138,35 @@ fn bag_index_listing_its_chunks_many_times_lists_each_message_once() {
     assert_eq!(store.messages.len(), expected);
 }
 
+fn u64_le(b: &[u8], at: usize) -> u64 {
+    u64::from_le_bytes(b[at..at + 8].try_into().expect("8 bytes"))
+}
+
+/// Where an MCAP file's footer starts (its opcode, length, summary start,
+/// summary offset start and CRC; then the closing magic), and its summary's
+/// records as (start, end, opcode).
+fn mcap_summary(mcap: &[u8]) -> (usize, Vec<(usize, usize, u8)>) {
+    let footer_at = mcap.len() - 8 - 29;
+    assert_eq!(mcap[footer_at], 0x02);
+    let mut pos = u64_le(mcap, footer_at + 9) as usize;
+    let mut records = Vec::new();
+    while pos < footer_at {
+        let end = pos + 9 + u64_le(mcap, pos + 1) as usize;
+        records.push((pos, end, mcap[pos]));
+        pos = end;
+    }
+    (footer_at, records)
+}
+
+/// `mcap` with `extra` inserted just before its footer (inside the summary,
+/// which the reader walks up to the footer).
+fn mcap_with_summary_records(mcap: &[u8], extra: &[u8]) -> Vec<u8> {
+    let (footer_at, _) = mcap_summary(mcap);
+    [&mcap[..footer_at], extra, &mcap[footer_at..]].concat()
+}
+
+const MCAP_CHUNK_INDEX: u8 = 0x08;
+
 #[test]
 fn mcap_summary_listing_its_chunks_many_times_lists_each_message_once() {
     let genuine = fixture("ros2_png.mcap");
@@ -145,30 +174,15 @@ fn mcap_summary_listing_its_chunks_many_times_lists_each_message_once() {
         .expect("genuine")
         .messages
         .len();
-    let u64_at = |p: usize| {
-        let mut b = [0u8; 8];
-        b.copy_from_slice(&genuine[p..p + 8]);
-        u64::from_le_bytes(b) as usize
-    };
-    // Footer: opcode, length, summary start, ...; then the closing magic.
-    let footer_at = genuine.len() - 8 - 29;
-    assert_eq!(genuine[footer_at], 0x02);
-    let mut pos = u64_at(footer_at + 9);
-    let mut indexes = Vec::new();
-    while pos < footer_at {
-        let end = pos + 9 + u64_at(pos + 1);
-        if genuine[pos] == 0x08 {
-            indexes.extend_from_slice(&genuine[pos..end]);
-        }
-        pos = end;
-    }
+    let (_, records) = mcap_summary(&genuine);
+    let indexes: Vec<u8> = records
+        .iter()
+        .filter(|r| r.2 == MCAP_CHUNK_INDEX)
+        .flat_map(|r| genuine[r.0..r.1].iter().copied())
+        .collect();
     assert!(!indexes.is_empty());
     // The chunk indexes repeated a hundred times just before the footer.
-    let mut mcap = genuine[..footer_at].to_vec();
-    for _ in 0..100 {
-        mcap.extend_from_slice(&indexes);
-    }
-    mcap.extend_from_slice(&genuine[footer_at..]);
+    let mcap = mcap_with_summary_records(&genuine, &indexes.repeat(100));
     let store = Store::open(mcap).expect("a repeated chunk index is read once");
     assert!(store.warnings().is_empty(), "{:?}", store.warnings());
     assert_eq!(store.messages.len(), expected);
@@ -185,24 +199,18 @@ fn mcap_chunk_index_overlapping_the_one_before_is_refused_and_the_file_scanned()
         .expect("genuine")
         .messages
         .len();
-    let u64_at = |b: &[u8], p: usize| u64::from_le_bytes(b[p..p + 8].try_into().expect("8 bytes"));
-    let footer_at = genuine.len() - 8 - 29;
-    let mut pos = u64_at(&genuine, footer_at + 9) as usize;
-    let index = loop {
-        let end = pos + 9 + u64_at(&genuine, pos + 1) as usize;
-        if genuine[pos] == 0x08 {
-            break genuine[pos..end].to_vec();
-        }
-        pos = end;
-    };
-    let mut shifted = index.clone();
+    let (_, records) = mcap_summary(&genuine);
+    let (start, end, _) = *records
+        .iter()
+        .find(|r| r.2 == MCAP_CHUNK_INDEX)
+        .expect("a chunk index");
+    let index = &genuine[start..end];
+    let mut shifted = index.to_vec();
     // Body: start time, end time, chunk offset, chunk length, ...
-    let (at, len) = (u64_at(&index, 9 + 16), u64_at(&index, 9 + 24));
+    let (at, len) = (u64_le(index, 9 + 16), u64_le(index, 9 + 24));
     shifted[9 + 16..9 + 24].copy_from_slice(&(at + 1).to_le_bytes());
     shifted[9 + 24..9 + 32].copy_from_slice(&(len - 1).to_le_bytes());
-    let mut mcap = genuine[..footer_at].to_vec();
-    mcap.extend_from_slice(&shifted);
-    mcap.extend_from_slice(&genuine[footer_at..]);
+    let mcap = mcap_with_summary_records(&genuine, &shifted);
     let store = Store::open(mcap).expect("scanned");
     assert!(
         store.warnings().iter().any(|w| w.contains("overlaps")),
@@ -363,9 +371,8 @@ fn bag_with_more_connections_than_its_cap_is_refused() {
 #[test]
 fn mcap_summary_record_above_its_cap_is_refused_before_it_is_read() {
     let mut mcap = fixture("ros2_png.mcap");
-    let footer_at = mcap.len() - 8 - 29;
-    let start = u64::from_le_bytes(mcap[footer_at + 9..footer_at + 17].try_into().expect("8"));
-    let at = start as usize + 1;
+    let (_, records) = mcap_summary(&mcap);
+    let at = records[0].0 + 1;
     let huge = upetrack_recordings::mcap::MAX_RECORD_BYTES + 1;
     mcap[at..at + 8].copy_from_slice(&huge.to_le_bytes());
     let len = mcap.len() as u64;

@@ -785,18 +785,31 @@ impl Tracker {
 mod tests {
     use super::*;
 
-    #[test]
-    fn restore_returns_to_a_snapshot_and_resamples_to_the_node_count() {
+    /// A tracker with `params` whose state is a straight rope of
+    /// `params.node_count` nodes 1 cm apart, 0.6 m away; and those nodes.
+    fn tracking_a_line(params: Params) -> (Tracker, Vec<Vec3>) {
         let cam = CameraIntrinsics::D435I_640X480;
-        let mut t = Tracker::new(Params::default(), cam, HsvRange::default()).expect("tracker");
-        let empty = t.snapshot();
-        let nodes: Vec<Vec3> = (0..24)
+        let mut t = Tracker::new(params, cam, HsvRange::default()).expect("tracker");
+        let nodes: Vec<Vec3> = (0..params.node_count)
             .map(|i| Vec3::new(i as f64 * 0.01, 0.0, 0.6))
             .collect();
         t.state = Some(TrackState {
             nodes: nodes.clone(),
             lost: false,
         });
+        (t, nodes)
+    }
+
+    #[test]
+    fn restore_returns_to_a_snapshot_and_resamples_to_the_node_count() {
+        let empty = {
+            let cam = CameraIntrinsics::D435I_640X480;
+            Tracker::new(Params::default(), cam, HsvRange::default())
+                .expect("tracker")
+                .snapshot()
+        };
+        let (mut t, nodes) = tracking_a_line(Params::default());
+        assert_eq!(nodes.len(), 24);
         t.known_length = Some(0.23);
         let snap = t.snapshot();
         t.reset();
@@ -815,15 +828,7 @@ mod tests {
 
     #[test]
     fn a_snapshot_with_a_nan_node_is_refused_and_the_state_kept() {
-        let cam = CameraIntrinsics::D435I_640X480;
-        let mut t = Tracker::new(Params::default(), cam, HsvRange::default()).expect("tracker");
-        let nodes: Vec<Vec3> = (0..24)
-            .map(|i| Vec3::new(i as f64 * 0.01, 0.0, 0.6))
-            .collect();
-        t.state = Some(TrackState {
-            nodes: nodes.clone(),
-            lost: false,
-        });
+        let (mut t, nodes) = tracking_a_line(Params::default());
         let mut bad = t.snapshot();
         if let Some(s) = bad.state.as_mut() {
             s.nodes[3].x = f64::NAN;
@@ -837,18 +842,9 @@ mod tests {
 
     #[test]
     fn a_snapshot_whose_step_state_is_of_another_rope_restarts_the_step() {
-        let cam = CameraIntrinsics::D435I_640X480;
-        let params = Params {
+        let (mut t, nodes) = tracking_a_line(Params {
             algorithm: Algorithm::Trackdlo,
             ..Params::default()
-        };
-        let mut t = Tracker::new(params, cam, HsvRange::default()).expect("tracker");
-        let nodes: Vec<Vec3> = (0..params.node_count)
-            .map(|i| Vec3::new(i as f64 * 0.01, 0.0, 0.6))
-            .collect();
-        t.state = Some(TrackState {
-            nodes: nodes.clone(),
-            lost: false,
         });
         let mut snap = t.snapshot();
         snap.stepper.start(&nodes[..3]);
