@@ -10,7 +10,8 @@ use upetrack_io::eval::quantile;
 use upetrack_io::run::run_frame;
 use upetrack_synth::{RenderSettings, Scenario, ScenarioKind};
 
-use crate::{algorithms, load_params, open_sequence, with_algorithm, Args, CliError};
+use crate::args::BenchArgs;
+use crate::{algorithms, load_params, open_sequence, with_algorithm, CliError};
 
 /// Frames decoded or rendered, then timed.
 struct Prepared {
@@ -36,14 +37,14 @@ fn timed(p: &Prepared, params: upetrack::Params, repeats: usize) -> Result<Stage
     let mut t = StageTimes::default();
     for _ in 0..repeats {
         let mut tracker =
-            Tracker::new(params, p.camera, p.hsv).map_err(|e| CliError(e.to_string()))?;
+            Tracker::new(params, p.camera, p.hsv).map_err(|e| CliError::input(e.to_string()))?;
         let start = Instant::now();
         let mut now = move || start.elapsed().as_secs_f64() * 1000.0;
         for (rgb, depth, occ) in &p.frames {
             let frame = Frame::new(p.camera.width, p.camera.height, rgb, depth, p.depth_scale)
-                .map_err(|e| CliError(e.to_string()))?;
+                .map_err(|e| CliError::input(e.to_string()))?;
             let rec = run_frame(&mut tracker, &frame, occ, &mut now)
-                .map_err(|e| CliError(e.to_string()))?;
+                .map_err(|e| CliError::input(e.to_string()))?;
             t.segment.push(rec.segment_ms);
             t.cloud.push(rec.cloud_ms);
             t.track.push(rec.track_ms);
@@ -54,16 +55,11 @@ fn timed(p: &Prepared, params: upetrack::Params, repeats: usize) -> Result<Stage
 }
 
 /// `upetrack bench [<sequence>...] [--frames N] [--repeat R] [--algorithm A,B,..]`.
-pub fn cmd_bench(raw: &[String]) -> Result<(), CliError> {
-    let args = Args::parse(
-        raw,
-        &[],
-        &crate::with_recording_options(&["frames", "repeat", "algorithm", "params"]),
-    )?;
-    let frames: usize = args.number("frames", 90)?;
-    let repeats: usize = args.number("repeat", 3)?.max(1);
+pub fn cmd_bench(args: &BenchArgs) -> Result<(), CliError> {
+    let frames = args.frames;
+    let repeats = args.repeat as usize;
     let mut sets = Vec::new();
-    if args.positional.is_empty() {
+    if args.sequences.is_empty() {
         for kind in [ScenarioKind::StaticS, ScenarioKind::DynamicPull] {
             let mut s = Scenario::new(kind, frames, 1, RenderSettings::default());
             let mut fr = Vec::new();
@@ -81,8 +77,8 @@ pub fn cmd_bench(raw: &[String]) -> Result<(), CliError> {
             });
         }
     } else {
-        for path in &args.positional {
-            let seq = open_sequence(path, &crate::RecordingArgs::from(&args)?)?;
+        for path in &args.sequences {
+            let seq = open_sequence(path, &args.recording)?;
             let mut fr = Vec::new();
             let mut decode_ms = Vec::new();
             for i in 0..seq.len().min(frames) {
@@ -101,8 +97,8 @@ pub fn cmd_bench(raw: &[String]) -> Result<(), CliError> {
             });
         }
     }
-    let params = load_params(args.value("params"))?;
-    let algorithms = algorithms(&args, &params)?;
+    let params = load_params(args.params.params.as_deref())?;
+    let algorithms = algorithms(&args.algorithm, &params);
     println!("| data | algorithm | size | frames x runs | median read+decode | median segmentation | median cloud | median tracking step | median whole frame | p90 whole frame |");
     println!("|---|---|---|---:|---:|---:|---:|---:|---:|---:|");
     for p in &sets {

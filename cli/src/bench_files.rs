@@ -25,18 +25,20 @@ pub(crate) fn ensure_written(
             "{} was written by another simulator: writing it again",
             dir.display()
         );
-        std::fs::remove_dir_all(dir).map_err(|e| CliError(format!("{}: {e}", dir.display())))?;
+        std::fs::remove_dir_all(dir)
+            .map_err(|e| CliError::input(format!("{}: {e}", dir.display())))?;
     }
     eprintln!("writing {} ...", dir.display());
     let partial = dir.with_extension("partial");
     if partial.exists() {
         std::fs::remove_dir_all(&partial)
-            .map_err(|e| CliError(format!("{}: {e}", partial.display())))?;
+            .map_err(|e| CliError::input(format!("{}: {e}", partial.display())))?;
     }
     write(&partial)?;
     std::fs::write(partial.join(FINGERPRINT_FILE), print)
-        .map_err(|e| CliError(format!("{}: {e}", partial.display())))?;
-    std::fs::rename(&partial, dir).map_err(|e| CliError(format!("{}: {e}", dir.display())))?;
+        .map_err(|e| CliError::input(format!("{}: {e}", partial.display())))?;
+    std::fs::rename(&partial, dir)
+        .map_err(|e| CliError::input(format!("{}: {e}", dir.display())))?;
     Ok(())
 }
 
@@ -47,16 +49,16 @@ pub(crate) fn update_between(
     begin: &str,
     end: &str,
 ) -> Result<(), CliError> {
-    let old =
-        std::fs::read_to_string(page).map_err(|e| CliError(format!("{}: {e}", page.display())))?;
+    let old = std::fs::read_to_string(page)
+        .map_err(|e| CliError::input(format!("{}: {e}", page.display())))?;
     let (Some(a), Some(b)) = (old.find(begin), old.find(end)) else {
-        return Err(CliError(format!(
+        return Err(CliError::input(format!(
             "{}: needs the lines {begin} and {end}",
             page.display()
         )));
     };
     if b < a {
-        return Err(CliError(format!(
+        return Err(CliError::input(format!(
             "{}: {end} comes before {begin}",
             page.display()
         )));

@@ -12,8 +12,11 @@ use upetrack_synth::{Scenario, ScenarioKind, Variant, SIMULATOR_VERSION};
 
 use crate::bench_files::{ensure_written, update_between};
 use crate::synth::write_scenario;
+use indicatif::ProgressBar;
+
+use crate::args::CompareArgs;
 use crate::{
-    evaluate, fmt, load_params, markdown_table, open_sequence, with_algorithm, Args, CliError,
+    evaluate, fmt, load_params, markdown_table, open_sequence, progress, with_algorithm, CliError,
 };
 
 /// Lines of a page between which `--update` writes the tables.
@@ -256,78 +259,70 @@ fn relative_table(summaries: &[Summary], algorithms: &[Algorithm]) -> String {
 }
 
 /// `upetrack compare [--data <dir>] [--frames N] [--json ..] [--markdown ..] [--update <page.md>]`.
-pub fn cmd_compare(raw: &[String]) -> Result<(), CliError> {
-    let args = Args::parse(
-        raw,
-        &[],
-        &[
-            "data",
-            "frames",
-            "json",
-            "markdown",
-            "update",
-            "params",
-            "algorithm",
-            "only",
-            "figures",
-            "random",
-            "count",
-        ],
-    )?;
-    let figures = args.value("figures").map(PathBuf::from);
-    let data = PathBuf::from(args.value("data").unwrap_or("target/compare-data"));
-    let frames = match args.value("frames") {
-        None => None,
-        Some(_) => Some(args.number::<usize>("frames", 90)?.clamp(10, 1000)),
+pub fn cmd_compare(args: &CompareArgs) -> Result<(), CliError> {
+    let figures = args.figures.clone();
+    let data = args.data.clone();
+    let frames = args.frames.map(|n| n as usize);
+    let params: Params = load_params(args.params.params.as_deref())?;
+    let algorithms = if args.algorithm.is_empty() {
+        Algorithm::ALL.to_vec()
+    } else {
+        crate::algorithms(&args.algorithm, &params)
     };
-    let params: Params = load_params(args.value("params"))?;
-    let algorithms = match args.value("algorithm") {
-        None => Algorithm::ALL.to_vec(),
-        Some(_) => crate::algorithms(&args, &params)?,
-    };
-    if let Some(range) = args.value("random") {
-        let count = args.number::<u64>("count", u64::MAX)?;
-        return crate::random_bench::run(
-            range,
-            count,
-            frames,
-            &data,
-            params,
-            &algorithms,
-            [
-                args.value("json"),
-                args.value("markdown"),
-                args.value("update"),
-            ],
-        );
+    if let Some(range) = &args.random {
+        return crate::random_bench::run(args, range, params, &algorithms);
+    }
+    if let Some(unknown) = args
+        .only
+        .iter()
+        .find(|n| !cases(frames).iter().any(|c| &c.name() == *n))
+    {
+        let names: Vec<String> = cases(frames).iter().map(Case::name).collect();
+        return Err(CliError::usage(format!(
+            "--only: no scenario is named `{unknown}`; the names are {}",
+            names.join(", ")
+        )));
     }
     // `--only a,b`: just the cases of these names (quick studies).
-    let only: Option<Vec<String>> = args
-        .value("only")
-        .map(|v| v.split(',').map(str::to_string).collect());
+    let selected: Vec<Case> = cases(frames)
+        .into_iter()
+        .filter(|c| args.only.is_empty() || args.only.contains(&c.name()))
+        .collect();
+    let bar = progress::bar(
+        (selected.len() * algorithms.len()) as u64,
+        "runs",
+        "compare",
+    );
     let mut summaries = Vec::new();
     let mut sweep = Vec::new();
-    for case in cases(frames) {
+    for case in selected {
         let name = case.name();
-        if only.as_ref().is_some_and(|o| !o.contains(&name)) {
-            continue;
-        }
+        bar.set_message(format!("compare {name}"));
         let dir = ensure_sequence(&data, &case)?;
         let seq = open_sequence(&dir.to_string_lossy(), &crate::RecordingArgs::default())?;
         let mut runs = Vec::new();
         for &a in &algorithms {
-            let (summary, result) = evaluate(&seq, &name, with_algorithm(params, a))?;
+            let (summary, result) = evaluate(
+                &seq,
+                &name,
+                with_algorithm(params, a),
+                &ProgressBar::hidden(),
+            )?;
+            bar.inc(1);
             if figures.is_some() && FIGURE_SCENES.contains(&name.as_str()) {
                 runs.push((
                     a.name(),
                     upetrack_io::eval::frame_errors(&result, &seq.groundtruth, &seq.camera),
                 ));
             }
-            eprintln!(
-                "{name:14} {:9} occluded mean {:>6} mm, median track {:.2} ms",
-                a.name(),
-                fmt(summary.occluded_mean_mm, 2),
-                summary.median_track_ms
+            progress::say(
+                &bar,
+                &format!(
+                    "{name:14} {:9} occluded mean {:>6} mm, median track {:.2} ms",
+                    a.name(),
+                    fmt(summary.occluded_mean_mm, 2),
+                    summary.median_track_ms
+                ),
             );
             if let (ScenarioKind::OcclusionSweep { percent }, true) =
                 (case.kind, case.variant.is_base())
@@ -349,9 +344,13 @@ pub fn cmd_compare(raw: &[String]) -> Result<(), CliError> {
             let svg = crate::figure::frame_error_svg(&name, &series, seq.first_occluded_frame());
             let path = dir.join(format!("frame-error-{name}.svg"));
             upetrack_io::write::write_file(&path, svg.as_bytes())?;
-            eprintln!("{}: the frame errors of {name}", path.display());
+            progress::say(
+                &bar,
+                &format!("{}: the frame errors of {name}", path.display()),
+            );
         }
     }
+    bar.finish_and_clear();
     let frames_note = match frames {
         Some(n) => format!("every scenario at {n} frames"),
         None => {
@@ -373,14 +372,14 @@ pub fn cmd_compare(raw: &[String]) -> Result<(), CliError> {
         sweep_table(&sweep, &algorithms),
     );
     println!("{text}");
-    if let Some(p) = args.value("json") {
-        upetrack_io::write::write_json(Path::new(p), &Comparison { summaries, sweep })?;
+    if let Some(p) = &args.outputs.json {
+        upetrack_io::write::write_json(p, &Comparison { summaries, sweep })?;
     }
-    if let Some(p) = args.value("markdown") {
-        upetrack_io::write::write_file(Path::new(p), text.as_bytes())?;
+    if let Some(p) = &args.outputs.markdown {
+        upetrack_io::write::write_file(p, text.as_bytes())?;
     }
-    if let Some(p) = args.value("update") {
-        update_page(Path::new(p), &text)?;
+    if let Some(p) = &args.update {
+        update_page(p, &text)?;
     }
     Ok(())
 }

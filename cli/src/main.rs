@@ -1,118 +1,88 @@
 //! The `upetrack` command: track sequences, evaluate against ground truth,
 //! write synthetic scenarios, and benchmark the per-frame cost.
 
+mod args;
 mod bench;
 mod bench_files;
 mod compare;
 mod figure;
 mod overlay;
+mod pipeline;
+mod progress;
 mod random_bench;
 mod recording;
 mod synth;
 
 use std::path::Path;
 use std::process::ExitCode;
-use std::time::Instant;
 
+use clap::{CommandFactory, Parser};
 use upetrack::{Algorithm, Params};
 use upetrack_io::eval::{summarise, Summary};
-use upetrack_io::run::track_sequence;
 use upetrack_io::{Sequence, SequenceError};
 
-const USAGE: &str = "\
-upetrack: track a rope in RGB-D sequences (UPETrack)
+pub use args::RecordingArgs;
+use args::{AlgorithmArg, Cli, Command, EvalArgs, ScoreArgs, TableOutputs, TrackArgs};
 
-USAGE:
-  upetrack track <sequence> --out <result.json> [--algorithm A] [--params <params.json>]
-  upetrack eval <sequence>... [--algorithm A,B,..] [--params <params.json>] [--json <out.json>] [--markdown <out.md>] [--per-frame <out.csv>]
-  upetrack score <sequence> <result.json>... [--json <out.json>] [--markdown <out.md>]
-  upetrack compare [--data <dir>] [--frames N] [--json <out.json>] [--markdown <out.md>] [--update <page.md>] [--figures <dir>]
-  upetrack compare --random tune|report [--count N] [--frames N] [--data <dir>] [--json ..] [--markdown ..] [--update <page.md>]
-  upetrack synth <scenario> <dir> [--frames N] [--seed S] [--hd] [--variant V] [--rope-prior]
-                 [--depth-noise X] [--jpeg-quality Q] [--y4m <video.y4m>]
-  upetrack synth random <dir> [--seed S] [--count N] [--frames N] [--rope-prior]
-  upetrack bench [<sequence>...] [--frames N] [--repeat R] [--algorithm A,B,..]
-  upetrack overlay <sequence> <result.json> <frame> <out.png> [--depth]
-  upetrack info <recording> [--json] [--color-topic T] [--depth-topic T]
-  upetrack export <recording> <dir> [--frames A..B] [--dlo <dlo.json>] [--color-topic T] [--depth-topic T]
-  upetrack scenarios
+/// Why a command failed; it sets the exit code (`upetrack --help` lists them).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Failure {
+    /// Bad input: exit code 1.
+    Input,
+    /// A malformed command line: exit code 2 (clap's own code for its errors).
+    Usage,
+    /// A bug in upetrack: exit code 3.
+    Internal,
+}
 
-A sequence is a folder in the layout of docs/sequence-format.md, a .zip of one, or a
-camera recording (ROS1 .bag or rosbag2 .db3 from the RealSense Viewer, rs-record or realsense-ros);
-a recording takes its configuration from --dlo <dlo.json> (colour range, occluders),
-and --color-topic / --depth-topic when the streams are not found by name;
---align x86-sse|portable picks librealsense's aligner (default: the recording's era).
-Algorithms: upetrack (default), cpd, trackdlo, cdcpd2; --algorithm overrides the parameter file's.
-Scenarios (`upetrack scenarios` describes them): static-s, dynamic-pull, tip-drag, sweep-10..sweep-70,
-lifted-swing, fast-pull, gripper-swing, box-over-end, box-over-middle, cable-desk, crossing-loop, in-pieces,
-pulled-through;
-synth --rope-prior writes the rope's length and diameter into dlo.json.
-synth random draws a whole scene from the seed (docs/synthetic.md lists the distributions) and writes
-what it drew in scene.json; --count N writes seeds S..S+N-1 into folders random-<seed>-<frames>f.
-compare --random runs every algorithm on the drawn scenes of a seed range: tune (1000..1099) to choose
-rules on, report (2000..2099) to judge them; --count N takes the range's first N seeds.";
+impl Failure {
+    fn exit_code(self) -> u8 {
+        match self {
+            Failure::Input => 1,
+            Failure::Usage => 2,
+            Failure::Internal => 3,
+        }
+    }
+}
 
 /// A command-line error with its message.
-struct CliError(String);
+#[derive(Debug)]
+pub struct CliError {
+    /// What kind of failure it is.
+    pub failure: Failure,
+    /// What went wrong, for the user.
+    pub message: String,
+}
+
+impl CliError {
+    /// Bad input (a file, a sequence, a value in it).
+    pub fn input(message: impl Into<String>) -> Self {
+        Self {
+            failure: Failure::Input,
+            message: message.into(),
+        }
+    }
+
+    /// Options that parse but do not go together.
+    pub fn usage(message: impl Into<String>) -> Self {
+        Self {
+            failure: Failure::Usage,
+            message: message.into(),
+        }
+    }
+
+    /// Something that should not happen (a worker thread panicked).
+    pub fn internal(message: impl Into<String>) -> Self {
+        Self {
+            failure: Failure::Internal,
+            message: message.into(),
+        }
+    }
+}
 
 impl From<SequenceError> for CliError {
     fn from(e: SequenceError) -> Self {
-        Self(e.to_string())
-    }
-}
-
-/// Parsed arguments: positionals and `--key value` options.
-struct Args {
-    positional: Vec<String>,
-    options: Vec<(String, Option<String>)>,
-}
-
-impl Args {
-    fn parse(raw: &[String], flags: &[&str], valued: &[&str]) -> Result<Self, CliError> {
-        let mut positional = Vec::new();
-        let mut options = Vec::new();
-        let mut it = raw.iter();
-        while let Some(a) = it.next() {
-            if let Some(key) = a.strip_prefix("--") {
-                if flags.contains(&key) {
-                    options.push((key.to_string(), None));
-                } else if valued.contains(&key) {
-                    let v = it
-                        .next()
-                        .ok_or_else(|| CliError(format!("--{key} needs a value")))?;
-                    options.push((key.to_string(), Some(v.clone())));
-                } else {
-                    return Err(CliError(format!("unknown option --{key}\n\n{USAGE}")));
-                }
-            } else {
-                positional.push(a.clone());
-            }
-        }
-        Ok(Self {
-            positional,
-            options,
-        })
-    }
-
-    fn value(&self, key: &str) -> Option<&str> {
-        self.options
-            .iter()
-            .rev()
-            .find(|(k, _)| k == key)
-            .and_then(|(_, v)| v.as_deref())
-    }
-
-    fn flag(&self, key: &str) -> bool {
-        self.options.iter().any(|(k, _)| k == key)
-    }
-
-    fn number<T: std::str::FromStr>(&self, key: &str, default: T) -> Result<T, CliError> {
-        match self.value(key) {
-            None => Ok(default),
-            Some(v) => v
-                .parse()
-                .map_err(|_| CliError(format!("--{key}: `{v}` is not a valid number"))),
-        }
+        Self::input(e.to_string())
     }
 }
 
@@ -127,24 +97,18 @@ fn load_params(path: Option<&str>) -> Result<Params, CliError> {
             return Ok(p);
         }
     }
-    let text = std::fs::read_to_string(path).map_err(|e| CliError(format!("{path}: {e}")))?;
+    let text =
+        std::fs::read_to_string(path).map_err(|e| CliError::input(format!("{path}: {e}")))?;
     Ok(upetrack_io::params_file::parse_params(&text, path)?)
 }
 
 /// The algorithms of `--algorithm a,b,..` (the parameter file's when absent).
-fn algorithms(args: &Args, params: &Params) -> Result<Vec<Algorithm>, CliError> {
-    let Some(list) = args.value("algorithm") else {
-        return Ok(vec![params.algorithm]);
-    };
-    list.split(',')
-        .map(|name| {
-            Algorithm::from_name(name.trim()).ok_or_else(|| {
-                CliError(format!(
-                    "--algorithm: unknown algorithm `{name}` (upetrack, cpd or trackdlo)"
-                ))
-            })
-        })
-        .collect()
+fn algorithms(chosen: &[AlgorithmArg], params: &Params) -> Vec<Algorithm> {
+    if chosen.is_empty() {
+        vec![params.algorithm]
+    } else {
+        chosen.iter().map(|a| a.0).collect()
+    }
 }
 
 /// `params` with `algorithm` as the tracking step.
@@ -158,42 +122,12 @@ fn with_algorithm(params: Params, algorithm: Algorithm) -> Params {
 /// A sequence from a folder, a .zip or a recording.
 pub type AnySequence = Sequence<Box<dyn upetrack_io::Source>>;
 
-/// Options of every command that reads sequences, for recordings.
-const RECORDING_OPTIONS: [&str; 4] = ["dlo", "color-topic", "depth-topic", "align"];
-
-/// `valued` with the recording options added.
-fn with_recording_options<'a>(valued: &[&'a str]) -> Vec<&'a str> {
-    valued.iter().copied().chain(RECORDING_OPTIONS).collect()
-}
-
-/// How to read a recording: its configuration file and topics.
-#[derive(Default)]
-struct RecordingArgs {
-    dlo: Option<String>,
-    options: upetrack_recordings::RecordingOptions,
-}
-
-impl RecordingArgs {
-    fn from(args: &Args) -> Result<Self, CliError> {
-        use upetrack_recordings::align::AlignArithmetic;
-        let align = match args.value("align") {
-            None => None,
-            Some("x86-sse") => Some(AlignArithmetic::X86Sse),
-            Some("portable") => Some(AlignArithmetic::Portable),
-            Some(other) => {
-                return Err(CliError(format!(
-                    "--align: `{other}` is not x86-sse or portable"
-                )))
-            }
-        };
-        Ok(Self {
-            dlo: args.value("dlo").map(str::to_string),
-            options: upetrack_recordings::RecordingOptions {
-                color_topic: args.value("color-topic").map(str::to_string),
-                depth_topic: args.value("depth-topic").map(str::to_string),
-                align,
-            },
-        })
+/// The reader options of `rec`.
+fn recording_options(topics: &args::TopicArgs) -> upetrack_recordings::RecordingOptions {
+    upetrack_recordings::RecordingOptions {
+        color_topic: topics.color_topic.clone(),
+        depth_topic: topics.depth_topic.clone(),
+        align: topics.align.map(Into::into),
     }
 }
 
@@ -202,50 +136,37 @@ fn open_sequence(path: &str, rec: &RecordingArgs) -> Result<AnySequence, CliErro
     if p.is_file() && upetrack_io::recorded::is_recording_file(p) {
         return Ok(upetrack_io::recorded::open_recording(
             p,
-            rec.dlo.as_deref().map(Path::new),
-            &rec.options,
+            rec.dlo.as_deref(),
+            &recording_options(&rec.topics),
         )?);
     }
     if rec.dlo.is_some() {
-        return Err(CliError(format!(
-            "{path}: --dlo is for recordings (.bag); a sequence folder has its own dlo.json"
+        return Err(CliError::usage(format!(
+            "{path}: --dlo is for recordings (.bag, .db3, .mcap); a sequence folder has its own dlo.json"
         )));
     }
     Ok(Sequence::open(upetrack_io::open::open_path(p)?)?)
 }
 
-fn now_ms_since(start: Instant) -> impl FnMut() -> f64 {
-    move || start.elapsed().as_secs_f64() * 1000.0
-}
-
-fn cmd_track(raw: &[String]) -> Result<(), CliError> {
-    let args = Args::parse(
-        raw,
-        &[],
-        &with_recording_options(&["out", "params", "algorithm"]),
-    )?;
-    let [seq_path] = args.positional.as_slice() else {
-        return Err(CliError(format!("track takes one sequence\n\n{USAGE}")));
+fn cmd_track(args: &TrackArgs) -> Result<(), CliError> {
+    let params = load_params(args.params.params.as_deref())?;
+    let params = match args.algorithm {
+        Some(a) => with_algorithm(params, a.0),
+        None => params,
     };
-    let out = args
-        .value("out")
-        .ok_or_else(|| CliError("track needs --out <result.json>".into()))?;
-    let params = load_params(args.value("params"))?;
-    let params = match algorithms(&args, &params)?.as_slice() {
-        [one] => with_algorithm(params, *one),
-        _ => return Err(CliError("track runs one algorithm".into())),
-    };
-    let seq = open_sequence(seq_path, &RecordingArgs::from(&args)?)?;
-    let result = track_sequence(&seq, params, &mut now_ms_since(Instant::now()))?;
-    upetrack_io::write::write_json(Path::new(out), &result)?;
+    let seq = open_sequence(&args.sequence, &args.recording)?;
+    let bar = progress::bar(seq.len() as u64, "frames", params.algorithm.name());
+    let result = pipeline::track(&seq, params, &bar)?;
+    bar.finish_and_clear();
+    upetrack_io::write::write_json(&args.out, &result)?;
     let lost = result.frames.iter().filter(|f| f.lost).count();
     eprintln!(
         "{}: {} frames tracked with {} ({} lost) -> {}",
-        seq_path,
+        args.sequence,
         result.frames.len(),
         result.algorithm,
         lost,
-        out
+        args.out.display()
     );
     report_initialisations(&result)
 }
@@ -277,7 +198,7 @@ fn report_initialisations(result: &upetrack_io::result::TrackResult) -> Result<(
             .iter()
             .find_map(|f| f.reason.clone())
             .unwrap_or_else(|| "the sequence has no frames".into());
-        return Err(CliError(format!(
+        return Err(CliError::input(format!(
             "no rope found in any frame (the result JSON lists every frame as lost): {why}\n\
              Check the colour range (dlo.json's segmentation), or describe the rope \
              (dlo.json's \"rope\": {{\"length_m\": .., \"diameter_m\": ..}})"
@@ -332,31 +253,29 @@ fn markdown_table(rows: &[Summary]) -> String {
     s
 }
 
-fn cmd_eval(raw: &[String]) -> Result<(), CliError> {
-    let args = Args::parse(
-        raw,
-        &[],
-        &with_recording_options(&["params", "json", "markdown", "per-frame", "algorithm"]),
-    )?;
-    if args.positional.is_empty() {
-        return Err(CliError(format!(
-            "eval takes at least one sequence\n\n{USAGE}"
-        )));
-    }
-    let params = load_params(args.value("params"))?;
-    let algorithms = algorithms(&args, &params)?;
-    let several = args.positional.len() > 1 || algorithms.len() > 1;
+fn cmd_eval(args: &EvalArgs) -> Result<(), CliError> {
+    let params = load_params(args.params.params.as_deref())?;
+    let algorithms = algorithms(&args.algorithm, &params);
+    let several = args.sequences.len() > 1 || algorithms.len() > 1;
+    let runs = args.sequences.len() * algorithms.len();
     let mut rows = Vec::new();
-    for path in &args.positional {
-        let seq = open_sequence(path, &RecordingArgs::from(&args)?)?;
+    for (s, path) in args.sequences.iter().enumerate() {
+        let seq = open_sequence(path, &args.recording)?;
         let name = sequence_name(path);
-        for &algorithm in &algorithms {
-            let (summary, result) = evaluate(&seq, &name, with_algorithm(params, algorithm))?;
-            if let Some(csv) = args.value("per-frame") {
+        for (k, &algorithm) in algorithms.iter().enumerate() {
+            let label = format!(
+                "{}/{runs} {name} {}",
+                s * algorithms.len() + k + 1,
+                algorithm.name()
+            );
+            let bar = progress::bar(seq.len() as u64, "frames", label);
+            let (summary, result) = evaluate(&seq, &name, with_algorithm(params, algorithm), &bar)?;
+            bar.finish_and_clear();
+            if let Some(csv) = &args.per_frame {
                 let path = if several {
                     format!("{csv}.{name}.{}.csv", algorithm.name())
                 } else {
-                    csv.to_string()
+                    csv.clone()
                 };
                 write_per_frame(Path::new(&path), &name, &result, &seq)?;
             }
@@ -366,31 +285,23 @@ fn cmd_eval(raw: &[String]) -> Result<(), CliError> {
             rows.push(summary);
         }
     }
-    print_table(&rows, &args)
+    print_table(&rows, &args.outputs)
 }
 
 /// `upetrack score <sequence> <result.json>...`: the eval table of result
 /// files written by any tracker in the contract's layout, against the
 /// sequence's ground truth.
-fn cmd_score(raw: &[String]) -> Result<(), CliError> {
-    let args = Args::parse(raw, &[], &with_recording_options(&["json", "markdown"]))?;
-    let (path, results) = match args.positional.as_slice() {
-        [path, results @ ..] if !results.is_empty() => (path, results),
-        _ => {
-            return Err(CliError(format!(
-                "score takes a sequence and result files\n\n{USAGE}"
-            )))
-        }
-    };
-    let seq = open_sequence(path, &RecordingArgs::from(&args)?)?;
-    let name = sequence_name(path);
+fn cmd_score(args: &ScoreArgs) -> Result<(), CliError> {
+    let seq = open_sequence(&args.sequence, &args.recording)?;
+    let name = sequence_name(&args.sequence);
     let mut rows = Vec::new();
-    for r in results {
-        let result = upetrack_io::result::read_result(Path::new(r))?;
+    for r in &args.results {
+        let result = upetrack_io::result::read_result(r)?;
         let in_order = result.frames.iter().enumerate().all(|(i, f)| f.frame == i);
         if result.frames.len() != seq.len() || !in_order {
-            return Err(CliError(format!(
-                "{r}: frames must be 0..{} in order, one entry each, as the sequence has (found {})",
+            return Err(CliError::input(format!(
+                "{}: frames must be 0..{} in order, one entry each, as the sequence has (found {})",
+                r.display(),
                 seq.len(),
                 result.frames.len()
             )));
@@ -403,7 +314,7 @@ fn cmd_score(raw: &[String]) -> Result<(), CliError> {
             seq.first_occluded_frame(),
         ));
     }
-    print_table(&rows, &args)
+    print_table(&rows, &args.outputs)
 }
 
 /// A sequence's name in tables: its folder's or file's name.
@@ -414,25 +325,27 @@ fn sequence_name(path: &str) -> String {
 }
 
 /// Prints the table of `rows`, and writes it where `--json` and `--markdown` say.
-fn print_table(rows: &[Summary], args: &Args) -> Result<(), CliError> {
+fn print_table(rows: &[Summary], outputs: &TableOutputs) -> Result<(), CliError> {
     let table = markdown_table(rows);
     println!("{table}");
-    if let Some(p) = args.value("json") {
-        upetrack_io::write::write_json(Path::new(p), &rows)?;
+    if let Some(p) = &outputs.json {
+        upetrack_io::write::write_json(p, &rows)?;
     }
-    if let Some(p) = args.value("markdown") {
-        upetrack_io::write::write_file(Path::new(p), table.as_bytes())?;
+    if let Some(p) = &outputs.markdown {
+        upetrack_io::write::write_file(p, table.as_bytes())?;
     }
     Ok(())
 }
 
-/// Tracks `seq` with `params` and summarises the errors against its ground truth.
+/// Tracks `seq` with `params` (counting frames on `bar`) and summarises
+/// the errors against its ground truth.
 fn evaluate(
     seq: &AnySequence,
     name: &str,
     params: Params,
+    bar: &indicatif::ProgressBar,
 ) -> Result<(Summary, upetrack_io::result::TrackResult), CliError> {
-    let result = track_sequence(seq, params, &mut now_ms_since(Instant::now()))?;
+    let result = pipeline::track(seq, params, bar)?;
     let summary = summarise(
         name,
         &result,
@@ -470,40 +383,50 @@ fn write_per_frame(
     Ok(())
 }
 
-fn run(raw: &[String]) -> Result<(), CliError> {
-    let Some((cmd, rest)) = raw.split_first() else {
-        println!("{USAGE}");
-        return Ok(());
-    };
-    match cmd.as_str() {
-        "track" => cmd_track(rest),
-        "eval" => cmd_eval(rest),
-        "score" => cmd_score(rest),
-        "compare" => compare::cmd_compare(rest),
-        "synth" => synth::cmd_synth(rest),
-        "bench" => bench::cmd_bench(rest),
-        "overlay" => overlay::cmd_overlay(rest),
-        "info" => recording::cmd_info(rest),
-        "export" => recording::cmd_export(rest),
-        "scenarios" => {
-            synth::list_scenarios();
+fn run(cli: Cli) -> Result<(), CliError> {
+    progress::set_quiet(cli.quiet);
+    match cli.command {
+        Command::Track(a) => cmd_track(&a),
+        Command::Eval(a) => cmd_eval(&a),
+        Command::Score(a) => cmd_score(&a),
+        Command::Compare(a) => compare::cmd_compare(&a),
+        Command::Synth(a) => synth::cmd_synth(&a),
+        Command::Bench(a) => bench::cmd_bench(&a),
+        Command::Overlay(a) => overlay::cmd_overlay(&a),
+        Command::Info(a) => recording::cmd_info(&a),
+        Command::Export(a) => recording::cmd_export(&a),
+        Command::Scenarios => {
+            print!("{}", args::scenario_list());
             Ok(())
         }
-        "-h" | "--help" | "help" => {
-            println!("{USAGE}");
+        Command::Algorithms => {
+            print!("{}", args::algorithm_list());
             Ok(())
         }
-        other => Err(CliError(format!("unknown command `{other}`\n\n{USAGE}"))),
+        Command::Completions { shell } => {
+            clap_complete::generate(
+                shell,
+                &mut Cli::command(),
+                "upetrack",
+                &mut std::io::stdout(),
+            );
+            Ok(())
+        }
     }
 }
 
 fn main() -> ExitCode {
-    let raw: Vec<String> = std::env::args().skip(1).collect();
-    match run(&raw) {
+    // clap prints its own errors (with a suggestion) and exits with 2 on a
+    // usage error, 0 on --help and --version.
+    let cli = Cli::parse();
+    match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
-        Err(CliError(msg)) => {
-            eprintln!("error: {msg}");
-            ExitCode::FAILURE
+        Err(e) => {
+            eprintln!("error: {}", e.message);
+            if e.failure == Failure::Usage {
+                eprintln!("\nFor more information, try '--help'.");
+            }
+            ExitCode::from(e.failure.exit_code())
         }
     }
 }

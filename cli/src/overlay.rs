@@ -2,13 +2,12 @@
 //! tracked nodes (red visible, yellow hidden) and the curve through them,
 //! to look at what the tracker did.
 
-use std::path::Path;
-
 use upetrack::math::Vec3;
 use upetrack_io::result::TrackResult;
 use upetrack_io::write::{encode_rgb_png, write_file};
 
-use crate::{open_sequence, Args, CliError, USAGE};
+use crate::args::OverlayArgs;
+use crate::{open_sequence, CliError};
 
 fn put(rgb: &mut [u8], w: i64, h: i64, x: i64, y: i64, c: [u8; 3]) {
     if x >= 0 && y >= 0 && x < w && y < h {
@@ -44,22 +43,21 @@ fn disc(rgb: &mut [u8], w: i64, h: i64, p: (f64, f64), r: i64, c: [u8; 3]) {
 }
 
 /// `upetrack overlay <sequence> <result.json> <frame> <out.png>`.
-pub fn cmd_overlay(raw: &[String]) -> Result<(), CliError> {
-    let args = Args::parse(raw, &["depth"], &crate::with_recording_options(&[]))?;
-    let [seq_path, result_path, frame, out] = args.positional.as_slice() else {
-        return Err(CliError(format!(
-            "overlay takes a sequence, a result, a frame and an output\n\n{USAGE}"
+pub fn cmd_overlay(args: &OverlayArgs) -> Result<(), CliError> {
+    let seq = open_sequence(&args.sequence, &args.recording)?;
+    let result: TrackResult = upetrack_io::result::read_result(&args.result)?;
+    let index = args.frame;
+    if index >= seq.len() {
+        return Err(CliError::input(format!(
+            "{}: frame {index} is past the last frame ({} frames)",
+            args.sequence,
+            seq.len()
         )));
-    };
-    let seq = open_sequence(seq_path, &crate::RecordingArgs::from(&args)?)?;
-    let result: TrackResult = upetrack_io::result::read_result(Path::new(result_path))?;
-    let index: usize = frame
-        .parse()
-        .map_err(|_| CliError(format!("`{frame}` is not a frame number")))?;
+    }
     let decoded = seq.frame(index)?;
     let (w, h) = (decoded.width as i64, decoded.height as i64);
     let mut rgb = decoded.color;
-    if args.flag("depth") {
+    if args.depth {
         rgb = upetrack_io::display::depth_to_rgb(&decoded.depth);
     }
     for r in seq.occlusions_at(index) {
@@ -104,7 +102,7 @@ pub fn cmd_overlay(raw: &[String]) -> Result<(), CliError> {
         }
     }
     write_file(
-        Path::new(out),
+        &args.out,
         &encode_rgb_png(decoded.width, decoded.height, &rgb)?,
     )?;
     Ok(())

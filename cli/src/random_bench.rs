@@ -17,7 +17,10 @@ use upetrack_synth::SIMULATOR_VERSION;
 
 use crate::bench_files::{ensure_written, update_between};
 use crate::synth::{for_each_parallel, random_dir, write_random};
-use crate::{evaluate, fmt, open_sequence, with_algorithm, CliError};
+use indicatif::ProgressBar;
+
+use crate::args::CompareArgs;
+use crate::{evaluate, fmt, open_sequence, progress, with_algorithm, CliError};
 
 /// Lines of a page between which `--update` writes the random table.
 const BEGIN_MARKER: &str = "<!-- random:begin -->";
@@ -50,7 +53,7 @@ struct RandomComparison {
 /// draw, so that a cached sequence of another draw is never reused.
 fn fingerprint(seed: u64, frames: usize) -> Result<String, CliError> {
     let draw = serde_json::to_string(&RandomScene::draw(seed, frames))
-        .map_err(|e| CliError(format!("random-{seed}: {e}")))?;
+        .map_err(|e| CliError::input(format!("random-{seed}: {e}")))?;
     Ok(format!("simulator {SIMULATOR_VERSION}, draw {draw}\n"))
 }
 
@@ -223,51 +226,63 @@ fn tables(
 /// `upetrack compare --random <tune|report> [--count N] [--frames N] [--data <dir>]
 /// [--algorithm A,B] [--params <params.json>] [--json ..] [--markdown ..] [--update <page.md>]`.
 pub fn run(
+    args: &CompareArgs,
     range_name: &str,
-    count: u64,
-    frames: Option<usize>,
-    data: &Path,
     params: Params,
     algorithms: &[Algorithm],
-    outputs: [Option<&str>; 3],
 ) -> Result<(), CliError> {
+    let count = args.count.unwrap_or(u64::MAX);
+    let data = args.data.as_path();
+    let (outputs, update) = (&args.outputs, args.update.as_deref());
     let range = SeedRange::parse(range_name).ok_or_else(|| {
-        CliError(format!(
+        CliError::usage(format!(
             "--random takes a seed range: {}",
             SeedRange::ALL
                 .map(|r| format!("{} (seeds {}..{})", r.name, r.first, r.first + r.count - 1))
                 .join(" or ")
         ))
     })?;
-    let frames = frames.unwrap_or(DEFAULT_RANDOM_FRAMES);
+    let frames = args.frames.map_or(DEFAULT_RANDOM_FRAMES, |n| n as usize);
     let seeds: Vec<u64> = range.seeds(count).collect();
     let dirs: Vec<(u64, PathBuf)> = seeds
         .iter()
         .map(|&s| (s, random_dir(data, s, frames)))
         .collect();
+    let bar = progress::bar(dirs.len() as u64, "scenes", "writing drawn scenes");
     for_each_parallel(&dirs, |(seed, dir)| {
         ensure_written(dir, &fingerprint(*seed, frames)?, |partial| {
-            write_random(*seed, frames, false, partial).map(drop)
-        })
+            write_random(*seed, frames, false, partial, &ProgressBar::hidden()).map(drop)
+        })?;
+        bar.inc(1);
+        Ok(())
     })?;
+    bar.finish_and_clear();
+    let bar = progress::bar(dirs.len() as u64, "scenes", "tracking drawn scenes");
     let rows = Mutex::new(Vec::new());
     let draws = Mutex::new(Vec::new());
     for_each_parallel(&dirs, |(seed, dir)| {
         let seq = open_sequence(&dir.to_string_lossy(), &crate::RecordingArgs::default())?;
         let scene: RandomScene = read_scene(dir)?;
         for &a in algorithms {
-            let (summary, _) =
-                evaluate(&seq, &format!("random-{seed}"), with_algorithm(params, a))?;
+            let (summary, _) = evaluate(
+                &seq,
+                &format!("random-{seed}"),
+                with_algorithm(params, a),
+                &ProgressBar::hidden(),
+            )?;
             let (after_mm, after_px) = if summary.occluded_mean_mm.is_finite() {
                 (summary.occluded_mean_mm, summary.occluded_mean_px)
             } else {
                 (summary.mm.mean, summary.px.mean)
             };
-            eprintln!(
-                "random-{seed:<5} {:9} after occlusion {:>6} mm {:>5} px",
-                a.name(),
-                fmt(after_mm, 2),
-                fmt(after_px, 2)
+            progress::say(
+                &bar,
+                &format!(
+                    "random-{seed:<5} {:9} after occlusion {:>6} mm {:>5} px",
+                    a.name(),
+                    fmt(after_mm, 2),
+                    fmt(after_px, 2)
+                ),
             );
             if let Ok(mut rows) = rows.lock() {
                 rows.push(Row {
@@ -281,22 +296,23 @@ pub fn run(
         if let Ok(mut draws) = draws.lock() {
             draws.push(scene);
         }
+        bar.inc(1);
         Ok(())
     })?;
+    bar.finish_and_clear();
     let mut rows = rows
         .into_inner()
-        .map_err(|_| CliError("a worker thread panicked".into()))?;
+        .map_err(|_| CliError::internal("a worker thread panicked"))?;
     let mut draws = draws
         .into_inner()
-        .map_err(|_| CliError("a worker thread panicked".into()))?;
+        .map_err(|_| CliError::internal("a worker thread panicked"))?;
     rows.sort_by_key(|r| r.seed);
     draws.sort_by_key(|d| d.seed);
     let text = tables(range, &rows, &draws, algorithms);
     println!("{text}");
-    let [json, markdown, update] = outputs;
-    if let Some(p) = json {
+    if let Some(p) = &outputs.json {
         upetrack_io::write::write_json(
-            Path::new(p),
+            p,
             &RandomComparison {
                 range: range.name,
                 seeds,
@@ -306,11 +322,11 @@ pub fn run(
             },
         )?;
     }
-    if let Some(p) = markdown {
-        upetrack_io::write::write_file(Path::new(p), text.as_bytes())?;
+    if let Some(p) = &outputs.markdown {
+        upetrack_io::write::write_file(p, text.as_bytes())?;
     }
     if let Some(p) = update {
-        update_between(Path::new(p), &text, BEGIN_MARKER, END_MARKER)?;
+        update_between(p, &text, BEGIN_MARKER, END_MARKER)?;
     }
     Ok(())
 }
@@ -318,7 +334,7 @@ pub fn run(
 /// The draw recorded beside a drawn sequence.
 fn read_scene(dir: &Path) -> Result<RandomScene, CliError> {
     let path = dir.join(upetrack_io::synthetic::SCENE_FILE);
-    let text =
-        std::fs::read_to_string(&path).map_err(|e| CliError(format!("{}: {e}", path.display())))?;
-    serde_json::from_str(&text).map_err(|e| CliError(format!("{}: {e}", path.display())))
+    let text = std::fs::read_to_string(&path)
+        .map_err(|e| CliError::input(format!("{}: {e}", path.display())))?;
+    serde_json::from_str(&text).map_err(|e| CliError::input(format!("{}: {e}", path.display())))
 }

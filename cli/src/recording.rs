@@ -1,13 +1,13 @@
 //! `upetrack info` and `upetrack export`: what a camera recording holds, and
 //! the recording written as a sequence folder.
 
-use std::path::Path;
 use std::time::Instant;
 
 use upetrack_io::recorded::OpenRecording;
 use upetrack_io::recording_info::RecordingInfo;
 
-use crate::{open_sequence, with_recording_options, Args, CliError, RecordingArgs, USAGE};
+use crate::args::{ExportArgs, InfoArgs};
+use crate::{open_sequence, progress, recording_options, CliError};
 
 fn print_info(info: &RecordingInfo) {
     println!("{}", info.path);
@@ -42,16 +42,12 @@ fn print_info(info: &RecordingInfo) {
 }
 
 /// `upetrack info <recording> [--json]`.
-pub fn cmd_info(raw: &[String]) -> Result<(), CliError> {
-    let args = Args::parse(raw, &["json"], &["color-topic", "depth-topic", "align"])?;
-    let [path] = args.positional.as_slice() else {
-        return Err(CliError(format!("info takes one recording\n\n{USAGE}")));
-    };
-    let rec = OpenRecording::open(Path::new(path), &RecordingArgs::from(&args)?.options)?;
+pub fn cmd_info(args: &InfoArgs) -> Result<(), CliError> {
+    let rec = OpenRecording::open(&args.recording, &recording_options(&args.topics))?;
     let info = rec.info();
-    if args.flag("json") {
+    if args.json {
         let text = serde_json::to_string_pretty(&info)
-            .map_err(|e| CliError(format!("cannot write JSON: {e}")))?;
+            .map_err(|e| CliError::internal(format!("cannot write JSON: {e}")))?;
         println!("{text}");
     } else {
         print_info(&info);
@@ -59,51 +55,21 @@ pub fn cmd_info(raw: &[String]) -> Result<(), CliError> {
     Ok(())
 }
 
-/// `A..B` (B excluded), `A..` or `..B`.
-fn frame_range(text: &str) -> Result<std::ops::Range<usize>, CliError> {
-    let bad = || CliError(format!("--frames: `{text}` is not a range like 10..200"));
-    let (a, b) = text.split_once("..").ok_or_else(bad)?;
-    let a = if a.is_empty() {
-        0
-    } else {
-        a.parse().map_err(|_| bad())?
-    };
-    let b = if b.is_empty() {
-        usize::MAX
-    } else {
-        b.parse().map_err(|_| bad())?
-    };
-    if a >= b {
-        return Err(bad());
-    }
-    Ok(a..b)
-}
-
 /// `upetrack export <recording> <dir> [--frames A..B] [--dlo dlo.json]`.
-pub fn cmd_export(raw: &[String]) -> Result<(), CliError> {
-    let args = Args::parse(raw, &[], &with_recording_options(&["frames"]))?;
-    let [path, dir] = args.positional.as_slice() else {
-        return Err(CliError(format!(
-            "export takes a recording and a folder\n\n{USAGE}"
-        )));
-    };
-    let range = match args.value("frames") {
-        Some(r) => frame_range(r)?,
-        None => 0..usize::MAX,
-    };
-    let seq = open_sequence(path, &RecordingArgs::from(&args)?)?;
+pub fn cmd_export(args: &ExportArgs) -> Result<(), CliError> {
+    let range = args.frames.clone().unwrap_or(0..usize::MAX);
+    let seq = open_sequence(&args.recording, &args.recording_args)?;
     let start = Instant::now();
-    let mut last_shown = 0;
-    let n =
-        upetrack_io::export::export_sequence(&seq, Path::new(dir), range, &mut |done, total| {
-            let tenth = done * 10 / total;
-            if tenth != last_shown {
-                last_shown = tenth;
-                eprint!("\r{done}/{total} frames");
-            }
-        })?;
+    let bar = progress::bar(0, "frames", "export");
+    let n = upetrack_io::export::export_sequence(&seq, &args.dir, range, &mut |done, total| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    })?;
+    bar.finish_and_clear();
     eprintln!(
-        "\r{path}: {n} frames written to {dir} in {:.2} s",
+        "{}: {n} frames written to {} in {:.2} s",
+        args.recording,
+        args.dir.display(),
         start.elapsed().as_secs_f64()
     );
     if let Some(info) = seq.recording_info() {
@@ -118,19 +84,4 @@ pub fn cmd_export(raw: &[String]) -> Result<(), CliError> {
         }
     }
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn frame_ranges_exclude_their_end() {
-        assert_eq!(frame_range("3..7").ok(), Some(3..7));
-        assert_eq!(frame_range("..7").ok(), Some(0..7));
-        assert_eq!(frame_range("5..").ok(), Some(5..usize::MAX));
-        assert!(frame_range("7..3").is_err());
-        assert!(frame_range("7").is_err());
-        assert!(frame_range("a..b").is_err());
-    }
 }

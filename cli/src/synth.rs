@@ -4,41 +4,33 @@ use std::path::Path;
 use std::time::Instant;
 
 use upetrack_io::synthetic::SyntheticWriter;
-use upetrack_io::write::{write_file, y4m_frame, y4m_header, JPEG_QUALITY};
+use upetrack_io::write::{write_file, y4m_frame, y4m_header};
 use upetrack_synth::random::DEFAULT_RANDOM_FRAMES;
 use upetrack_synth::variant::D435I_1280X720;
-use upetrack_synth::{Scenario, ScenarioKind, Variant};
+use upetrack_synth::Scenario;
 
-use crate::{Args, CliError, USAGE};
+use indicatif::ProgressBar;
 
-/// Prints every scenario with its description.
-pub fn list_scenarios() {
-    for k in ScenarioKind::EXAMPLES {
-        let name = match k {
-            ScenarioKind::OcclusionSweep { .. } => {
-                format!("sweep-<K> (K in 10..={})", ScenarioKind::MAX_SWEEP_PERCENT)
-            }
-            _ => k.name(),
-        };
-        println!("{name:28} {}", k.description());
-    }
-    println!("\nvariants (--variant):");
-    for v in Variant::ALL {
-        println!("{:28} {}", v.name, v.description);
-    }
-}
+use crate::args::{SynthArgs, SynthScenario};
+use crate::{progress, CliError};
 
 /// Writes `scenario` into `dir`; returns the number of frames written.
 pub fn write_scenario(scenario: Scenario, dir: &Path) -> Result<usize, CliError> {
-    write_scenario_and_video(SyntheticWriter::new(scenario), dir, None)
+    write_scenario_and_video(
+        SyntheticWriter::new(scenario),
+        dir,
+        None,
+        &ProgressBar::hidden(),
+    )
 }
 
 /// [`write_scenario`], and with `video` its colour frames as a `.y4m` (a
-/// fake camera's input) from the same rendering.
+/// fake camera's input) from the same rendering; `bar` counts the frames.
 fn write_scenario_and_video(
     writer: SyntheticWriter,
     dir: &Path,
     video: Option<&Path>,
+    bar: &ProgressBar,
 ) -> Result<usize, CliError> {
     let camera = writer.scenario().camera();
     let fps = upetrack_io::synthetic::SYNTHETIC_FPS as u32;
@@ -47,6 +39,7 @@ fn write_scenario_and_video(
         writer,
         &mut |(path, bytes)| write_file(&dir.join(path), &bytes),
         &mut |f| {
+            bar.inc(1);
             if let Some(out) = y4m.as_mut() {
                 out.extend(y4m_frame(camera.width, camera.height, &f.rgb)?);
             }
@@ -59,90 +52,47 @@ fn write_scenario_and_video(
     Ok(n)
 }
 
-/// Largest `--depth-noise` multiplier.
-pub const MAX_DEPTH_NOISE: f64 = 10.0;
-
 /// `upetrack synth <scenario> <dir> [--frames N] [--seed S] [--hd] [--variant V]
 /// [--depth-noise X] [--jpeg-quality Q] [--y4m <video.y4m>]`.
-pub fn cmd_synth(raw: &[String]) -> Result<(), CliError> {
-    let args = Args::parse(
-        raw,
-        &["hd", "rope-prior"],
-        &[
-            "count",
-            "frames",
-            "seed",
-            "variant",
-            "depth-noise",
-            "jpeg-quality",
-            "y4m",
-        ],
-    )?;
-    let [name, dir] = args.positional.as_slice() else {
-        return Err(CliError(format!(
-            "synth takes a scenario and a folder\n\n{USAGE}"
-        )));
+pub fn cmd_synth(args: &SynthArgs) -> Result<(), CliError> {
+    let kind = match args.scenario {
+        SynthScenario::Random => return synth_random(args),
+        SynthScenario::Described(kind) => kind,
     };
-    if name == "random" {
-        return synth_random(&args, Path::new(dir));
+    if args.count.is_some() {
+        return Err(CliError::usage(
+            "--count is for `synth random`: a described scenario is one folder",
+        ));
     }
-    let kind = ScenarioKind::parse(name).ok_or_else(|| {
-        CliError(format!(
-            "unknown scenario `{name}`; `upetrack scenarios` lists them"
-        ))
-    })?;
-    let frames: usize = args.number("frames", 150)?;
-    if frames == 0 || frames > upetrack_synth::MAX_FRAMES {
-        return Err(CliError(format!(
-            "--frames must be in 1..={}",
-            upetrack_synth::MAX_FRAMES
-        )));
-    }
-    let seed: u64 = args.number("seed", 1)?;
-    let variant = match args.value("variant") {
-        None => kind.default_variant(),
-        Some(v) => Variant::parse(v).ok_or_else(|| {
-            CliError(format!(
-                "unknown variant `{v}`; `upetrack scenarios` lists them"
-            ))
-        })?,
-    };
+    let frames = args.frames.map_or(DEFAULT_FRAMES, |n| n as usize);
+    let variant = args.variant.unwrap_or_else(|| kind.default_variant());
     let mut render = variant.render();
-    if args.flag("hd") {
+    if args.hd {
         render.camera = D435I_1280X720;
     }
-    let depth_noise: f64 = args.number("depth-noise", 1.0)?;
-    if !(0.0..=MAX_DEPTH_NOISE).contains(&depth_noise) {
-        return Err(CliError(format!(
-            "--depth-noise must be in 0..={MAX_DEPTH_NOISE}"
-        )));
-    }
-    render.depth_noise_multiplier *= depth_noise;
-    let quality: u8 = args.number("jpeg-quality", JPEG_QUALITY)?;
-    if !(1..=100).contains(&quality) {
-        return Err(CliError("--jpeg-quality must be in 1..=100".into()));
-    }
+    render.depth_noise_multiplier *= args.depth_noise.unwrap_or(1.0);
     let start = Instant::now();
-    let scenario = Scenario::with_rope(kind, frames, seed, render, variant.rope());
+    let scenario = Scenario::with_rope(kind, frames, args.seed, render, variant.rope());
     let writer = SyntheticWriter::new(scenario)
-        .with_jpeg_quality(quality)
-        .with_rope_prior(args.flag("rope-prior"));
-    let video = args.value("y4m");
-    let n = write_scenario_and_video(writer, Path::new(dir), video.map(Path::new))?;
-    if let Some(video) = video {
-        eprintln!("{video}: the {n} colour frames as a .y4m video");
+        .with_jpeg_quality(args.jpeg_quality)
+        .with_rope_prior(args.rope_prior);
+    let bar = progress::bar(frames as u64, "frames", kind.name());
+    let n = write_scenario_and_video(writer, &args.dir, args.y4m.as_deref(), &bar)?;
+    bar.finish_and_clear();
+    if let Some(video) = &args.y4m {
+        eprintln!("{}: the {n} colour frames as a .y4m video", video.display());
     }
     eprintln!(
         "{}: {n} frames of {} written in {:.1} s",
-        dir,
+        args.dir.display(),
         kind.name(),
         start.elapsed().as_secs_f64()
     );
     Ok(())
 }
 
-/// Most scenes one `synth random --count` writes.
-pub const MAX_RANDOM_COUNT: u64 = 10_000;
+/// Frames of a described scenario when `--frames` is absent.
+const DEFAULT_FRAMES: usize = 150;
 
 /// The folder of drawn scene `seed` inside `dir`.
 pub fn random_dir(dir: &Path, seed: u64, frames: usize) -> std::path::PathBuf {
@@ -152,30 +102,25 @@ pub fn random_dir(dir: &Path, seed: u64, frames: usize) -> std::path::PathBuf {
 /// `upetrack synth random <dir> [--seed S] [--count N] [--frames N] [--rope-prior]`:
 /// one drawn scene into `dir`, or with `--count` scenes `S..S+N` into
 /// folders `random-<seed>-<frames>f` inside it, two at a time.
-fn synth_random(args: &Args, dir: &Path) -> Result<(), CliError> {
-    let frames: usize = args.number("frames", DEFAULT_RANDOM_FRAMES)?;
-    if frames == 0 || frames > upetrack_synth::MAX_FRAMES {
-        return Err(CliError(format!(
-            "--frames must be in 1..={}",
-            upetrack_synth::MAX_FRAMES
+fn synth_random(args: &SynthArgs) -> Result<(), CliError> {
+    let frames = args.frames.map_or(DEFAULT_RANDOM_FRAMES, |n| n as usize);
+    let refused = [
+        ("hd", args.hd),
+        ("variant", args.variant.is_some()),
+        ("depth-noise", args.depth_noise.is_some()),
+        ("y4m", args.y4m.is_some()),
+    ];
+    if let Some((name, _)) = refused.iter().find(|(_, given)| *given) {
+        return Err(CliError::usage(format!(
+            "--{name} does not apply to `synth random`: the camera, rope and noise are drawn from the seed"
         )));
     }
-    for refused in ["hd", "variant", "depth-noise", "y4m"] {
-        if args.flag(refused) || args.value(refused).is_some() {
-            return Err(CliError(format!(
-                "--{refused} does not apply to `synth random`: the camera, rope and noise are drawn from the seed"
-            )));
-        }
-    }
-    let seed: u64 = args.number("seed", 1)?;
+    let (seed, dir, prior) = (args.seed, args.dir.as_path(), args.rope_prior);
     let start = Instant::now();
-    let prior = args.flag("rope-prior");
-    let Some(count) = args
-        .value("count")
-        .map(|_| args.number::<u64>("count", 1))
-        .transpose()?
-    else {
-        write_random(seed, frames, prior, dir)?;
+    let Some(count) = args.count else {
+        let bar = progress::bar(frames as u64, "frames", format!("random-{seed}"));
+        write_random(seed, frames, prior, dir, &bar)?;
+        bar.finish_and_clear();
         eprintln!(
             "{}: {frames} frames of random-{seed} written in {:.1} s",
             dir.display(),
@@ -183,15 +128,20 @@ fn synth_random(args: &Args, dir: &Path) -> Result<(), CliError> {
         );
         return Ok(());
     };
-    if !(1..=MAX_RANDOM_COUNT).contains(&count) {
-        return Err(CliError(format!(
-            "--count must be in 1..={MAX_RANDOM_COUNT}"
-        )));
-    }
     let seeds: Vec<u64> = (seed..seed.saturating_add(count)).collect();
+    let bar = progress::bar(count, "scenes", "synth random");
     for_each_parallel(&seeds, |&s| {
-        write_random(s, frames, prior, &random_dir(dir, s, frames)).map(drop)
+        write_random(
+            s,
+            frames,
+            prior,
+            &random_dir(dir, s, frames),
+            &ProgressBar::hidden(),
+        )?;
+        bar.inc(1);
+        Ok(())
     })?;
+    bar.finish_and_clear();
     eprintln!(
         "{}: {count} drawn scenes of {frames} frames (seeds {seed}..{}) written in {:.1} s",
         dir.display(),
@@ -202,9 +152,15 @@ fn synth_random(args: &Args, dir: &Path) -> Result<(), CliError> {
 }
 
 /// Writes drawn scene `seed` into `dir` (its `scene.json` beside the contract's files).
-pub fn write_random(seed: u64, frames: usize, prior: bool, dir: &Path) -> Result<usize, CliError> {
+pub fn write_random(
+    seed: u64,
+    frames: usize,
+    prior: bool,
+    dir: &Path,
+    bar: &ProgressBar,
+) -> Result<usize, CliError> {
     let writer = SyntheticWriter::new(Scenario::random(seed, frames)).with_rope_prior(prior);
-    write_scenario_and_video(writer, dir, None)
+    write_scenario_and_video(writer, dir, None, bar)
 }
 
 /// Runs `work` on every item, one item per thread at a time on as many

@@ -49,6 +49,16 @@ impl Algorithm {
         }
     }
 
+    /// What the algorithm is, in one line (the command's help lists it).
+    pub fn description(self) -> &'static str {
+        match self {
+            Algorithm::Upetrack => "UPETrack, the paper's tracker (default)",
+            Algorithm::Cpd => "coherent point drift from the previous nodes (baseline)",
+            Algorithm::Trackdlo => "TrackDLO (Xiang et al. 2023), reimplemented (baseline)",
+            Algorithm::Cdcpd2 => "CDCPD2 (Wang et al. 2021), reimplemented (baseline)",
+        }
+    }
+
     /// The algorithm of a name given by [`Algorithm::name`].
     pub fn from_name(name: &str) -> Option<Self> {
         Self::ALL.into_iter().find(|a| a.name() == name)

@@ -6,7 +6,7 @@ use upetrack::{Params, Tracker};
 
 use crate::error::SequenceError;
 use crate::result::{FrameRecord, TrackResult};
-use crate::sequence::Sequence;
+use crate::sequence::{DecodedFrame, Sequence};
 use crate::source::Source;
 
 /// One frame through the tracker with the stages timed.
@@ -96,6 +96,59 @@ pub fn track_result(params: Params, mut frames: Vec<FrameRecord>) -> TrackResult
     }
 }
 
+/// The tracking half of a run over a sequence: decoded frames in, in
+/// order, the result out. [`track_sequence`] feeds it from the same
+/// thread; the command feeds it from a thread that decodes ahead.
+pub struct SequenceRun {
+    tracker: Tracker,
+    params: Params,
+    depth_scale: f64,
+    records: Vec<FrameRecord>,
+}
+
+impl SequenceRun {
+    /// A run of `params` over `seq` (its camera, colour range, rope prior).
+    pub fn new<S: Source>(seq: &Sequence<S>, params: Params) -> Result<Self, SequenceError> {
+        let tracker = seq
+            .tracker(params)
+            .map_err(|e| SequenceError::invalid("parameters", e.to_string()))?;
+        Ok(Self {
+            tracker,
+            params,
+            depth_scale: seq.depth_scale,
+            records: Vec::with_capacity(seq.len()),
+        })
+    }
+
+    /// Tracks the next frame; `name` (its colour file) names it in errors.
+    pub fn push(
+        &mut self,
+        decoded: &DecodedFrame,
+        occlusions: &[upetrack::Rect],
+        name: &str,
+        now_ms: &mut dyn FnMut() -> f64,
+    ) -> Result<&FrameRecord, SequenceError> {
+        let frame = decoded
+            .frame(self.depth_scale)
+            .map_err(|e| SequenceError::invalid(name, e.to_string()))?;
+        let record = track_frame(
+            &mut self.tracker,
+            self.records.len(),
+            &frame,
+            occlusions,
+            now_ms,
+        )
+        .map_err(|e| SequenceError::invalid(name, e.to_string()))?;
+        self.records.push(record);
+        Ok(&self.records[self.records.len() - 1])
+    }
+
+    /// The result of the frames pushed so far.
+    pub fn finish(self) -> TrackResult {
+        track_result(self.params, self.records)
+    }
+}
+
 /// Tracks every frame of `seq` with `params`. A frame whose images cannot
 /// be decoded is an error naming the file; nothing is skipped silently.
 pub fn track_sequence<S: Source>(
@@ -103,18 +156,10 @@ pub fn track_sequence<S: Source>(
     params: Params,
     now_ms: &mut dyn FnMut() -> f64,
 ) -> Result<TrackResult, SequenceError> {
-    let mut tracker = seq
-        .tracker(params)
-        .map_err(|e| SequenceError::invalid("parameters", e.to_string()))?;
-    let mut frames = Vec::with_capacity(seq.len());
+    let mut run = SequenceRun::new(seq, params)?;
     for i in 0..seq.len() {
         let decoded = seq.frame(i)?;
-        let frame = decoded
-            .frame(seq.depth_scale)
-            .map_err(|e| SequenceError::invalid(&seq.color_files[i], e.to_string()))?;
-        let record = track_frame(&mut tracker, i, &frame, &seq.occlusions_at(i), now_ms)
-            .map_err(|e| SequenceError::invalid(&seq.color_files[i], e.to_string()))?;
-        frames.push(record);
+        run.push(&decoded, &seq.occlusions_at(i), &seq.frame_name(i), now_ms)?;
     }
-    Ok(track_result(params, frames))
+    Ok(run.finish())
 }

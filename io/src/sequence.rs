@@ -603,6 +603,14 @@ impl<S: Source> Sequence<S> {
         Ok(t)
     }
 
+    /// How messages name frame `index`: its colour file.
+    pub fn frame_name(&self, index: usize) -> String {
+        self.color_files
+            .get(index)
+            .cloned()
+            .unwrap_or_else(|| format!("frame {index}"))
+    }
+
     /// Reads and decodes frame `index`, checking both images against the intrinsics.
     pub fn frame(&self, index: usize) -> Result<DecodedFrame, SequenceError> {
         if let Some(reader) = &self.reader {

@@ -1,0 +1,236 @@
+//! The command line as a user meets it: help for every command, errors that
+//! suggest, exit codes, progress only on a terminal, completions.
+
+mod common;
+
+use std::process::Command;
+
+use common::run;
+
+/// The commands `upetrack --help` lists (clap's own `help` left out).
+fn commands() -> Vec<String> {
+    let out = run(&["--help"]);
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    let list = text
+        .split("Commands:\n")
+        .nth(1)
+        .and_then(|t| t.split("\n\n").next())
+        .expect("a command list");
+    list.lines()
+        .filter(|l| l.starts_with("  ") && !l.starts_with("   "))
+        .filter_map(|l| l.split_whitespace().next())
+        .filter(|c| *c != "help")
+        .map(str::to_string)
+        .collect()
+}
+
+/// Options each command's help must name (a sample that catches a command
+/// losing its options or another's).
+const OPTIONS: [(&str, &[&str]); 12] = [
+    (
+        "track",
+        &["--out", "--algorithm", "--params", "--dlo", "--align"],
+    ),
+    (
+        "eval",
+        &["--algorithm", "--per-frame", "--json", "--markdown"],
+    ),
+    ("score", &["--json", "--markdown", "<SEQUENCE>"]),
+    (
+        "compare",
+        &[
+            "--data", "--frames", "--only", "--random", "--count", "--update",
+        ],
+    ),
+    (
+        "synth",
+        &[
+            "--frames",
+            "--seed",
+            "--hd",
+            "--variant",
+            "--rope-prior",
+            "--y4m",
+        ],
+    ),
+    ("bench", &["--frames", "--repeat", "--algorithm"]),
+    ("overlay", &["--depth", "<FRAME>", "<OUT>"]),
+    ("info", &["--json", "--color-topic", "--depth-topic"]),
+    ("export", &["--frames", "--dlo"]),
+    ("scenarios", &["--help"]),
+    ("algorithms", &["--help"]),
+    ("completions", &["<SHELL>"]),
+];
+
+#[test]
+fn every_command_has_help_naming_its_options_and_an_example() {
+    let listed = commands();
+    let described: Vec<&str> = OPTIONS.iter().map(|(c, _)| *c).collect();
+    assert_eq!(listed, described, "every listed command is checked here");
+    for (command, options) in OPTIONS {
+        let out = run(&[command, "--help"]);
+        let help = String::from_utf8_lossy(&out.stdout);
+        assert!(out.status.success(), "{command} --help: {:?}", out.status);
+        assert!(
+            help.contains(&format!("Usage: upetrack {command}")),
+            "{command}: {help}"
+        );
+        for option in options {
+            assert!(help.contains(option), "{command} --help lacks {option}");
+        }
+        if !["scenarios", "algorithms"].contains(&command) {
+            assert!(help.contains("Example"), "{command} --help has no example");
+        }
+    }
+}
+
+#[test]
+fn version_is_the_packages() {
+    let out = run(&["--version"]);
+    assert!(out.status.success());
+    assert_eq!(
+        String::from_utf8_lossy(&out.stdout).trim(),
+        format!("upetrack {}", env!("CARGO_PKG_VERSION"))
+    );
+}
+
+#[test]
+fn an_unknown_option_is_a_usage_error_with_a_suggestion() {
+    let out = run(&[
+        "track",
+        "samples/static-s",
+        "--out",
+        "x.json",
+        "--algoritm",
+        "cpd",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("'--algoritm'") && err.contains("'--algorithm'"),
+        "{err}"
+    );
+
+    let out = run(&["trak"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("'track'"), "{err}");
+
+    let out = run(&["eval", "x", "--algorithm", "upetrak"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("upetrack, cpd, trackdlo, cdcpd2"), "{err}");
+}
+
+#[test]
+fn options_that_do_not_go_together_are_usage_errors() {
+    let dir = common::temp_dir("command-line", "usage");
+    let dir = dir.to_str().expect("utf-8");
+    for args in [
+        vec!["synth", "random", dir, "--hd"],
+        vec!["synth", "static-s", dir, "--count", "3"],
+        vec!["compare", "--only", "no-such-scene"],
+        vec!["compare", "--count", "3"],
+        vec![
+            "track",
+            "samples/static-s",
+            "--out",
+            "x.json",
+            "--dlo",
+            "dlo.json",
+        ],
+    ] {
+        let out = run(&args);
+        assert_eq!(
+            out.status.code(),
+            Some(2),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+}
+
+#[test]
+fn bad_input_exits_with_1_naming_the_file() {
+    let out = run(&["track", "/no/such/sequence", "--out", "x.json"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("/no/such/sequence"), "{err}");
+}
+
+#[test]
+fn the_algorithm_lists_are_the_cores() {
+    let core: Vec<&str> = upetrack::Algorithm::ALL.iter().map(|a| a.name()).collect();
+    let out = run(&["eval", "--help"]);
+    let help = String::from_utf8_lossy(&out.stdout);
+    let in_help: Vec<&str> = help
+        .lines()
+        .filter_map(|l| l.trim().strip_prefix("- "))
+        .filter_map(|l| l.split(':').next())
+        .filter(|name| !name.contains(' '))
+        .take_while(|name| !["x86-sse"].contains(name))
+        .collect();
+    assert_eq!(in_help, core, "{help}");
+    let out = run(&["algorithms"]);
+    let listed: Vec<String> = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .filter_map(|l| l.split_whitespace().next().map(str::to_string))
+        .collect();
+    assert_eq!(listed, core);
+}
+
+#[test]
+fn completions_are_written_for_each_shell() {
+    for shell in ["bash", "zsh", "fish", "elvish", "powershell"] {
+        let out = run(&["completions", shell]);
+        assert!(out.status.success(), "{shell}");
+        let script = String::from_utf8_lossy(&out.stdout);
+        for word in ["upetrack", "track", "per-frame"] {
+            assert!(script.contains(word), "{shell} completion lacks {word}");
+        }
+    }
+    assert_eq!(run(&["completions", "tcsh"]).status.code(), Some(2));
+}
+
+/// Runs `upetrack <args>` on a pseudo-terminal (util-linux `script`) and
+/// returns what it printed there.
+fn on_a_terminal(args: &str) -> String {
+    let out = Command::new("script")
+        .args([
+            "-qec",
+            &format!("{} {args}", env!("CARGO_BIN_EXE_upetrack")),
+            "/dev/null",
+        ])
+        .output()
+        .expect("util-linux `script` runs the command on a pseudo-terminal");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// What a progress bar prints: the count of frames and the rate.
+const BAR: &str = "frames (";
+
+#[test]
+fn progress_is_drawn_on_a_terminal_only_and_never_with_quiet() {
+    let dir = common::temp_dir("command-line", "progress");
+    std::fs::create_dir_all(&dir).expect("folder");
+    let out = dir.join("result.json");
+    let out = out.to_str().expect("utf-8");
+    let seq = concat!(env!("CARGO_MANIFEST_DIR"), "/../samples/static-s");
+    let shown = on_a_terminal(&format!("track {seq} --out {out}"));
+    assert!(shown.contains(BAR), "a terminal shows the bar: {shown}");
+    let quiet = on_a_terminal(&format!("track {seq} --out {out} --quiet"));
+    assert!(
+        !quiet.contains(BAR) && quiet.contains("25 frames tracked"),
+        "{quiet}"
+    );
+    let piped = run(&["track", seq, "--out", out]);
+    let err = String::from_utf8_lossy(&piped.stderr);
+    assert!(piped.status.success());
+    assert!(!err.contains(BAR) && !err.contains('\r'), "{err}");
+}
