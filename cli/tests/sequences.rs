@@ -355,8 +355,12 @@ fn algorithm_option_names_the_algorithm_and_eval_tables_every_pair() {
     assert_eq!(v["frames"].as_array().map(Vec::len), Some(6));
 
     let o = track("gltp");
-    assert!(!o.status.success());
-    assert!(String::from_utf8_lossy(&o.stderr).contains("unknown algorithm `gltp`"));
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("invalid value 'gltp'") && err.contains("cdcpd2"),
+        "{err}"
+    );
 
     let json = dir.join("eval.json");
     let o = run(&[

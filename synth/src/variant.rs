@@ -87,8 +87,23 @@ impl Variant {
         table_color: [0.80, 0.68, 0.50],
     };
 
+    /// A green rope on oak at 1280x720: the table is as saturated as the
+    /// rope and passes its value and saturation range, so only the hue
+    /// tells them apart (the scene where segmentation once took 7x longer).
+    pub const HD_GREEN_OAK: Self = Self {
+        name: "hd-green-oak",
+        description: "1280x720, tilted 20 degrees, 0.7 m, 10 mm green rope on saturated oak",
+        hd: true,
+        tilt_degrees: 20.0,
+        distance: 0.7,
+        rope_diameter: 0.010,
+        rope_length: 0.8,
+        rope_color: GREEN,
+        table_color: [0.70, 0.48, 0.26],
+    };
+
     /// Every variant, the base first.
-    pub const ALL: [Self; 6] = [
+    pub const ALL: [Self; 7] = [
         Self::BASE,
         Self {
             name: "hd-tilted-red",
@@ -137,6 +152,7 @@ impl Variant {
             table_color: [0.92, 0.92, 0.90],
         },
         Self::DESK_BLACK_CABLE,
+        Self::HD_GREEN_OAK,
     ];
 
     /// The variant called `name`.

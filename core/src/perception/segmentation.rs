@@ -348,6 +348,47 @@ fn chroma_intervals(range: &HsvRange) -> [(i32, u32); 256] {
     table
 }
 
+/// Hue units of one sixth of the hue circle: within each, the same channel
+/// is largest and the same smallest.
+const HUE_SECTOR: i32 = (HUE_MAX as i32 + 1) / 6;
+
+/// Which sixths of the hue circle the hue range meets, one unit wider on
+/// each side (OpenCV's fixed-point hue is within a unit of the true hue),
+/// as 0 or 1 per sixth, for a pre-test on bytes. Sixth `k` holds the hues
+/// `k * 60 .. (k + 1) * 60` degrees; a pixel is in it when its channels
+/// are ordered as [`in_hue_sectors`] says (ties in both neighbours).
+fn hue_sectors(range: &HsvRange) -> [u8; 6] {
+    let circle = HUE_MAX as i32 + 1;
+    let start = i32::from(range.lower[0]) - 1;
+    let length = (i32::from(range.upper[0]) - i32::from(range.lower[0])).rem_euclid(circle) + 2;
+    let mut met = [0u8; 6];
+    for (k, m) in met.iter_mut().enumerate() {
+        // The sixth [a, a + 60) meets the arc [start, start + length] when
+        // the arc's start lies within `length` before the sixth's end.
+        let a = k as i32 * HUE_SECTOR;
+        let before_end = (a + HUE_SECTOR - start).rem_euclid(circle);
+        let from_start = (a - start).rem_euclid(circle);
+        *m = u8::from(length + 1 >= circle || from_start <= length || before_end <= HUE_SECTOR);
+    }
+    met
+}
+
+/// 1 when a pixel's channels put it in a sixth of the hue circle marked
+/// in `sectors` (a grey pixel is in all of them), else 0. Byte
+/// comparisons only, so that lanes of pixels vectorise.
+#[inline(always)]
+fn in_hue_sectors(sectors: &[u8; 6], r: u8, g: u8, b: u8) -> u8 {
+    let (rg, gr) = (u8::from(r >= g), u8::from(g >= r));
+    let (gb, bg) = (u8::from(g >= b), u8::from(b >= g));
+    let (rb, br) = (u8::from(r >= b), u8::from(b >= r));
+    (sectors[0] & rg & gb)
+        | (sectors[1] & gr & rb)
+        | (sectors[2] & gb & br)
+        | (sectors[3] & bg & gr)
+        | (sectors[4] & br & rg)
+        | (sectors[5] & rb & bg)
+}
+
 /// Segments `frame` with `range` after setting the colour pixels inside each
 /// of `occlusions` to black (depth is left as it is). Value and saturation
 /// are tested together by one table lookup per pixel (`chroma_intervals`),
@@ -366,7 +407,10 @@ pub fn segment(frame: &Frame<'_>, range: &HsvRange, occlusions: &[Rect]) -> Mask
     // second, on 16 bits and only where the first found candidates, asks
     // for the saturation: OpenCV's is `255 diff / v` rounded, so a pixel
     // that passes has `255 diff / v > s_lo - 1`, that is
-    // `255 diff + v > s_lo v`. Both keep every pixel the exact test may take.
+    // `255 diff + v > s_lo v`. The third, on bytes and only where the
+    // second found candidates, asks for the sixths of the hue circle the
+    // hue range meets (`hue_sectors`): a table as saturated as the rope is
+    // told from it by hue alone. All keep every pixel the exact test may take.
     let (v_lo, v_hi) = (range.lower[2], range.upper[2]);
     let s_lo = u16::from(range.lower[1]);
     let least_diff = chroma
@@ -375,6 +419,8 @@ pub fn segment(frame: &Frame<'_>, range: &HsvRange, occlusions: &[Rect]) -> Mask
         .map(|c| c.0)
         .min()
         .map_or(u8::MAX, |d| d.min(255) as u8);
+    let sectors = hue_sectors(range);
+    let all_hues = sectors == [1; 6];
     let color = frame.color;
     for (k, m) in mask.data.chunks_mut(SEGMENT_BLOCK).enumerate() {
         let start = 3 * SEGMENT_BLOCK * k;
@@ -407,6 +453,15 @@ pub fn segment(frame: &Frame<'_>, range: &HsvRange, occlusions: &[Rect]) -> Mask
             }
             if saturated == 0 {
                 continue;
+            }
+            if !all_hues {
+                let mut hued = 0u8;
+                for i in 0..3 * SEGMENT_BLOCK {
+                    hued |= PIXEL_STARTS[i] & in_hue_sectors(&sectors, r[i], g[i], b[i]);
+                }
+                if hued == 0 {
+                    continue;
+                }
             }
         }
         for (px, m) in block.chunks_exact(3).zip(m) {
@@ -627,6 +682,59 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// The hue pre-test never rejects a colour whose OpenCV hue is in the
+    /// range: every colour of a grid (with the channels' extremes and
+    /// ties), for hue ranges all round the circle, wrapping ones included.
+    /// And it does reject: a green range leaves out most colours, and a
+    /// range of one sixth all colours of the opposite sixths.
+    #[test]
+    fn hue_sectors_keep_every_colour_in_range_and_reject_the_others() {
+        let levels: Vec<u8> = (0..=255u8).step_by(5).chain([1, 2, 254]).collect();
+        for lo in (0..=HUE_MAX).step_by(7) {
+            for hi in (0..=HUE_MAX).step_by(11) {
+                let range = HsvRange {
+                    lower: [lo, 0, 0],
+                    upper: [hi, 255, 255],
+                };
+                let sectors = hue_sectors(&range);
+                let mut rejected = 0usize;
+                for &r in &levels {
+                    for &g in &levels {
+                        for &b in &levels {
+                            let hsv = rgb_to_hsv([r, g, b]);
+                            let kept = in_hue_sectors(&sectors, r, g, b) == 1;
+                            assert!(
+                                kept || !range.contains(hsv),
+                                "{lo}..{hi} ({sectors:?}): rgb {r} {g} {b} has hue {}",
+                                hsv[0]
+                            );
+                            rejected += usize::from(!kept);
+                        }
+                    }
+                }
+                if (lo, hi) == (49, 77) {
+                    let all = levels.len().pow(3);
+                    assert!(rejected * 2 > all, "{rejected} of {all}");
+                }
+            }
+        }
+        let green = HsvRange {
+            lower: [35, 0, 0],
+            upper: [85, 255, 255],
+        };
+        assert_eq!(hue_sectors(&green), [0, 1, 1, 0, 0, 0]);
+        let red = HsvRange {
+            lower: [170, 0, 0],
+            upper: [8, 255, 255],
+        };
+        assert_eq!(hue_sectors(&red), [1, 0, 0, 0, 0, 1]);
+        let everything = HsvRange {
+            lower: [5, 0, 0],
+            upper: [3, 255, 255],
+        };
+        assert_eq!(hue_sectors(&everything), [1; 6]);
     }
 
     /// The block pre-test may skip a block only when no pixel of it is in
