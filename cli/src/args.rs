@@ -456,7 +456,8 @@ pub fn algorithm_list() -> String {
 /// `upetrack bench`.
 #[derive(Debug, Args)]
 pub struct BenchArgs {
-    /// Sequences to time [default: the synthetic static-s and dynamic-pull].
+    /// Sequences to time [default: synthetic static-s and dynamic-pull at
+    /// 640x480, static-s at 1280x720 in the hd-green-oak variant].
     pub sequences: Vec<String>,
     /// Frames of each sequence.
     #[arg(long, default_value_t = 90)]

@@ -9,7 +9,7 @@ use upetrack::perception::initialisation::RopePrior;
 use upetrack::tracker::TrackerError;
 use upetrack::{CameraIntrinsics, Frame, HsvRange, Params, Rect, Tracker};
 
-use crate::decode::{decode_color, decode_depth, RgbImage};
+use crate::decode::{decode_color, decode_depth, DepthImage, RgbImage};
 use crate::error::SequenceError;
 use crate::recording_info::RecordingInfo;
 use crate::source::{is_inside_name, Source};
@@ -290,6 +290,42 @@ pub struct Sequence<S: Source> {
     pub depth_files: Vec<String>,
     /// Where the frames come from when they are not image files (a recording).
     reader: Option<RefCell<Box<dyn FrameReader>>>,
+}
+
+/// A frame's colour and depth images decoded, or why not.
+type Decoded = (
+    Result<RgbImage, SequenceError>,
+    Result<DepthImage, SequenceError>,
+);
+
+/// Decodes a frame's colour and depth files at once where there are
+/// threads: the depth on a second thread (the two take about as long), so
+/// a frame is ready in the time of the slower one.
+#[cfg(not(target_arch = "wasm32"))]
+fn decode_pair(color: (&[u8], &str), depth: (&[u8], &str)) -> Decoded {
+    std::thread::scope(|scope| {
+        let helper = std::thread::Builder::new()
+            .name("depth decoder".into())
+            .spawn_scoped(scope, || decode_depth(depth.0, depth.1));
+        let rgb = decode_color(color.0, color.1);
+        let depth = match helper {
+            Ok(h) => h.join().unwrap_or_else(|_| {
+                Err(SequenceError::invalid(depth.1, "the depth decoder stopped"))
+            }),
+            // No thread to be had: in turn.
+            Err(_) => decode_depth(depth.0, depth.1),
+        };
+        (rgb, depth)
+    })
+}
+
+/// Decodes a frame's colour and depth files in turn (no threads here).
+#[cfg(target_arch = "wasm32")]
+fn decode_pair(color: (&[u8], &str), depth: (&[u8], &str)) -> Decoded {
+    (
+        decode_color(color.0, color.1),
+        decode_depth(depth.0, depth.1),
+    )
 }
 
 fn read_json<T: serde::de::DeserializeOwned, S: Source>(
@@ -623,8 +659,13 @@ impl<S: Source> Sequence<S> {
                 format!("no frame {index}"),
             ));
         };
-        let color: RgbImage = decode_color(&self.source.read(cpath)?, &self.source.display(cpath))?;
-        let depth = decode_depth(&self.source.read(dpath)?, &self.source.display(dpath))?;
+        let color_bytes = self.source.read(cpath)?;
+        let depth_bytes = self.source.read(dpath)?;
+        let (color, depth) = decode_pair(
+            (&color_bytes, &self.source.display(cpath)),
+            (&depth_bytes, &self.source.display(dpath)),
+        );
+        let (color, depth) = (color?, depth?);
         for (path, w, h) in [
             (cpath, color.width, color.height),
             (dpath, depth.width, depth.height),

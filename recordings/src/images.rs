@@ -117,10 +117,12 @@ impl Pixels {
     /// any other kind.
     pub fn to_u16(&self) -> Option<Vec<u16>> {
         (self.sixteen && self.channels == 1).then(|| {
-            self.data
-                .chunks_exact(2)
-                .map(|b| u16::from_be_bytes([b[0], b[1]]))
-                .collect()
+            // Into a buffer of known length, so that the byte swap vectorises.
+            let mut out = vec![0u16; self.data.len() / 2];
+            for (o, b) in out.iter_mut().zip(self.data.chunks_exact(2)) {
+                *o = u16::from_be_bytes([b[0], b[1]]);
+            }
+            out
         })
     }
 }

@@ -45,6 +45,13 @@ pub const UNEXPLAINED_LIMIT: f64 = 0.3;
 /// initialisation, and a rope that became long enough to pass the length
 /// rule shows more points than one that did not.
 pub const JUMP_RETRY_GROWTH: f64 = 0.1;
+/// Longest wait, in frames, between recoveries from steps that contradict
+/// the images (`2^k - 1` frames after the `k`-th recovery in a row): a
+/// recovery costs a whole initialisation (10-50 ms at 1280x720, against
+/// half a millisecond for a step), so a state that keeps contradicting
+/// the images costs at most about one initialisation in this many frames,
+/// yet is still retried. 63 frames: two seconds at 30 frames/s.
+pub const MAX_RECOVERY_WAIT: u32 = 63;
 
 /// Errors building or reconfiguring a tracker.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -194,7 +201,46 @@ pub struct TrackerSnapshot {
     rest_length: Option<f64>,
     #[cfg_attr(feature = "serde", serde(default))]
     refused_jump_cloud: Option<usize>,
+    #[cfg_attr(feature = "serde", serde(default))]
+    recovery: RecoveryBackoff,
     stepper: Stepper,
+}
+
+/// How often a state that contradicts the images is re-initialised: after
+/// the `k`-th recovery in a row, the next waits `2^k - 1` frames (at most
+/// [`MAX_RECOVERY_WAIT`]); a step that agrees with the images ends the row.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct RecoveryBackoff {
+    /// Recoveries since the last step that agreed with the images.
+    in_a_row: u32,
+    /// Frames still to wait before the next recovery.
+    wait: u32,
+}
+
+impl RecoveryBackoff {
+    /// `true` when a recovery may run on this frame; else one frame of the
+    /// wait passes.
+    fn may_recover(&mut self) -> bool {
+        if self.wait == 0 {
+            return true;
+        }
+        self.wait -= 1;
+        false
+    }
+
+    /// A recovery ran (taken or not): the next one waits longer.
+    fn recovered(&mut self) {
+        self.in_a_row = self.in_a_row.saturating_add(1);
+        self.wait = 1u32
+            .checked_shl(self.in_a_row)
+            .map_or(MAX_RECOVERY_WAIT, |w| (w - 1).min(MAX_RECOVERY_WAIT));
+    }
+
+    /// A step agreed with the images: recoveries run at once again.
+    fn agreed(&mut self) {
+        *self = Self::default();
+    }
 }
 
 /// Tracks one rope across the frames of one camera.
@@ -214,6 +260,8 @@ pub struct Tracker {
     /// Cloud size at the last refused jump re-initialisation, while fewer
     /// than `reinit_visible_fraction` of the nodes stay visible.
     refused_jump_cloud: Option<usize>,
+    /// When the next recovery from a contradicting step may run.
+    recovery: RecoveryBackoff,
     /// The per-frame step of `params.algorithm`.
     stepper: Stepper,
     /// What the user knows of the rope.
@@ -241,6 +289,7 @@ impl Tracker {
             known_radius: None,
             rest_length: None,
             refused_jump_cloud: None,
+            recovery: RecoveryBackoff::default(),
             stepper: Stepper::new(params.algorithm),
             prior: RopePrior::default(),
             hint: None,
@@ -327,6 +376,7 @@ impl Tracker {
             known_radius: self.known_radius,
             rest_length: self.rest_length,
             refused_jump_cloud: self.refused_jump_cloud,
+            recovery: self.recovery,
             stepper: self.stepper.clone(),
         }
     }
@@ -363,6 +413,7 @@ impl Tracker {
         self.known_radius = snapshot.known_radius;
         self.rest_length = snapshot.rest_length;
         self.refused_jump_cloud = snapshot.refused_jump_cloud;
+        self.recovery = snapshot.recovery;
         self.stepper = snapshot.stepper;
         if restart || !self.stepper.fits(self.nodes()) {
             self.stepper = Stepper::new(self.params.algorithm);
@@ -379,6 +430,7 @@ impl Tracker {
         self.known_radius = None;
         self.rest_length = None;
         self.refused_jump_cloud = None;
+        self.recovery = RecoveryBackoff::default();
         self.stepper = Stepper::new(self.params.algorithm);
     }
 
@@ -493,10 +545,16 @@ impl Tracker {
         let input = self.step_input(&camera, frame, obs, &prev, &classes);
         let out = self.stepper.step(&input, &self.params);
         if self.contradicts_evidence(&out.nodes, &obs.cloud, &out.report) {
-            if let Ok(mut again) = self.try_initialise(frame, obs) {
-                again.status = FrameStatus::Recovered;
-                return again;
+            if self.recovery.may_recover() {
+                let attempt = self.try_initialise(frame, obs);
+                self.recovery.recovered();
+                if let Ok(mut again) = attempt {
+                    again.status = FrameStatus::Recovered;
+                    return again;
+                }
             }
+        } else {
+            self.recovery.agreed();
         }
         self.state = Some(TrackState {
             nodes: out.nodes.clone(),
@@ -784,6 +842,30 @@ impl Tracker {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Recoveries in a row wait 1, 3, 7, ... frames between them, never more than
+    /// [`MAX_RECOVERY_WAIT`]; a step that agrees with the images ends the row.
+    #[test]
+    fn recoveries_in_a_row_back_off_exponentially_up_to_the_cap() {
+        let mut b = RecoveryBackoff::default();
+        let mut ran = Vec::new();
+        for frame in 0..200 {
+            if b.may_recover() {
+                ran.push(frame);
+                b.recovered();
+            }
+        }
+        assert_eq!(ran[..7], [0, 2, 6, 14, 30, 62, 126]);
+        let gaps: Vec<u32> = ran.windows(2).map(|w| w[1] - w[0]).collect();
+        assert!(gaps.iter().all(|&g| g <= MAX_RECOVERY_WAIT + 1), "{gaps:?}");
+        assert_eq!(gaps.last(), Some(&(MAX_RECOVERY_WAIT + 1)));
+        b.agreed();
+        assert!(b.may_recover());
+        for _ in 0..100 {
+            b.recovered();
+        }
+        assert_eq!(b.wait, MAX_RECOVERY_WAIT);
+    }
 
     /// A tracker with `params` whose state is a straight rope of
     /// `params.node_count` nodes 1 cm apart, 0.6 m away; and those nodes.
