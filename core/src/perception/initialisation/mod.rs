@@ -16,6 +16,7 @@ mod candidates;
 mod graph;
 mod lift;
 mod report;
+mod runs;
 mod skeleton;
 
 use alloc::vec::Vec;

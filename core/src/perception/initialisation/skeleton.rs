@@ -5,6 +5,7 @@
 use alloc::vec;
 use alloc::vec::Vec;
 
+use super::runs::{distance_transform, fill_small_holes, set_cells};
 use crate::math::Vec2;
 use crate::perception::segmentation::Mask;
 
@@ -49,8 +50,12 @@ pub(super) fn shapes(mask: &Mask, min_pixels: usize) -> (Vec<Shape>, Vec<u32>) {
     let mut found: Vec<Vec<usize>> = Vec::new();
     let mut stack = Vec::new();
     // Labels are provisional here (u32::MAX marks a visited pixel).
-    for start in 0..mask.data.len() {
-        if !mask.data[start] || label[start] != 0 {
+    let mut next = 0;
+    // Jumps from set pixel to set pixel (the mask is mostly empty).
+    while let Some(k) = mask.data[next..].iter().position(|&m| m) {
+        let start = next + k;
+        next = start + 1;
+        if label[start] != 0 {
             continue;
         }
         let mut blob = Vec::new();
@@ -175,7 +180,7 @@ impl Grid {
 
     /// Zhang-Suen thinning to a one-cell-wide skeleton.
     pub fn thin(&mut self) {
-        let mut live: Vec<usize> = (0..self.cells.len()).filter(|&i| self.cells[i]).collect();
+        let mut live = set_cells(&self.cells, self.w);
         let mut remove = Vec::new();
         loop {
             let mut changed = false;
@@ -246,15 +251,20 @@ impl Grid {
     /// Spurs that branch (a ragged bump) go over several passes, at most
     /// [`MAX_PRUNE_PASSES`].
     pub fn prune_spurs(&mut self) {
+        let mut skeleton = set_cells(&self.cells, self.w);
         for _ in 0..MAX_PRUNE_PASSES {
-            if !self.prune_spurs_once() {
+            if !self.prune_spurs_once(&skeleton) {
                 break;
             }
+            skeleton.retain(|&i| self.cells[i]);
         }
     }
 
-    fn prune_spurs_once(&mut self) -> bool {
-        let ends: Vec<usize> = (0..self.cells.len())
+    /// One pass of [`Grid::prune_spurs`] over the `skeleton`'s cells.
+    fn prune_spurs_once(&mut self, skeleton: &[usize]) -> bool {
+        let ends: Vec<usize> = skeleton
+            .iter()
+            .copied()
             .filter(|&i| self.cells[i] && self.inside(i) && self.degree(i) == 1)
             .collect();
         let mut remove = Vec::new();
@@ -316,68 +326,6 @@ impl Grid {
     }
 }
 
-/// Fills the holes of a shape (unset regions not reaching the grid's
-/// border) no larger than the square of its mean width (twice its area
-/// over its perimeter): a pixel of glare or a speck of colour noise inside
-/// a rope, which the skeleton would otherwise go round. A loop the rope
-/// lies in encloses far more.
-fn fill_small_holes(cells: &mut [bool], w: usize, h: usize) {
-    let set = |i: usize, c: &[bool]| c[i];
-    let side = |i: usize| -> [Option<usize>; 4] {
-        let (x, y) = (i % w, i / w);
-        [
-            (y > 0).then(|| i - w),
-            (x + 1 < w).then(|| i + 1),
-            (y + 1 < h).then(|| i + w),
-            (x > 0).then(|| i - 1),
-        ]
-    };
-    let area = cells.iter().filter(|&&c| c).count();
-    let perimeter = (0..cells.len())
-        .filter(|&i| set(i, cells) && side(i).iter().any(|n| n.is_some_and(|j| !cells[j])))
-        .count();
-    if perimeter == 0 {
-        return;
-    }
-    let width = 2.0 * area as f64 / perimeter as f64;
-    let limit = (width * width) as usize;
-    // 0 unvisited, 1 outside, 2 a hole already looked at.
-    let mut seen = vec![0u8; cells.len()];
-    let mut stack = vec![0usize];
-    seen[0] = 1;
-    while let Some(i) = stack.pop() {
-        for j in side(i).into_iter().flatten() {
-            if !cells[j] && seen[j] == 0 {
-                seen[j] = 1;
-                stack.push(j);
-            }
-        }
-    }
-    let mut hole = Vec::new();
-    for start in 0..cells.len() {
-        if cells[start] || seen[start] != 0 {
-            continue;
-        }
-        hole.clear();
-        seen[start] = 2;
-        stack.push(start);
-        while let Some(i) = stack.pop() {
-            hole.push(i);
-            for j in side(i).into_iter().flatten() {
-                if !cells[j] && seen[j] == 0 {
-                    seen[j] = 2;
-                    stack.push(j);
-                }
-            }
-        }
-        if hole.len() <= limit {
-            for &i in &hole {
-                cells[i] = true;
-            }
-        }
-    }
-}
-
 /// Number of runs of unset cells round a ring that include a side cell
 /// (N, E, S or W): the background regions touching the cell.
 fn background_runs(p: &[bool; 8]) -> usize {
@@ -434,102 +382,9 @@ fn ring_components(p: &[bool; 8]) -> usize {
     (0..8).filter(|&k| p[k] && root(&mut group, k) == k).count()
 }
 
-/// Exact Euclidean distance from each set cell to the nearest unset cell
-/// (Felzenszwalb and Huttenlocher's lower envelope of parabolas, by columns
-/// then rows); unset cells get 0.
-fn distance_transform(cells: &[bool], w: usize, h: usize) -> Vec<f32> {
-    let inf = ((w + h) * (w + h)) as f64;
-    let mut sq: Vec<f64> = cells.iter().map(|&c| if c { inf } else { 0.0 }).collect();
-    let n = w.max(h);
-    let mut f = vec![0.0; n];
-    let mut out = vec![0.0; n];
-    let mut hull = vec![0usize; n];
-    let mut bounds = vec![0.0; n + 1];
-    for x in 0..w {
-        for y in 0..h {
-            f[y] = sq[y * w + x];
-        }
-        envelope(&f[..h], &mut out[..h], &mut hull, &mut bounds);
-        for y in 0..h {
-            sq[y * w + x] = out[y];
-        }
-    }
-    for y in 0..h {
-        f[..w].copy_from_slice(&sq[y * w..(y + 1) * w]);
-        envelope(&f[..w], &mut out[..w], &mut hull, &mut bounds);
-        sq[y * w..(y + 1) * w].copy_from_slice(&out[..w]);
-    }
-    sq.iter().map(|&d| libm::sqrt(d) as f32).collect()
-}
-
-/// One dimension of [`distance_transform`]: `out[q] = min_p (q - p)^2 + f[p]`.
-fn envelope(f: &[f64], out: &mut [f64], hull: &mut [usize], bounds: &mut [f64]) {
-    let n = f.len();
-    if n == 0 {
-        return;
-    }
-    let mut k = 0;
-    hull[0] = 0;
-    bounds[0] = f64::NEG_INFINITY;
-    bounds[1] = f64::INFINITY;
-    let cross = |p: usize, q: usize| {
-        ((f[q] + (q * q) as f64) - (f[p] + (p * p) as f64)) / (2.0 * (q as f64 - p as f64))
-    };
-    for q in 1..n {
-        // bounds[0] is minus infinity, so the loop stops at k = 0.
-        let mut s = cross(hull[k], q);
-        while s <= bounds[k] {
-            k -= 1;
-            s = cross(hull[k], q);
-        }
-        k += 1;
-        hull[k] = q;
-        bounds[k] = s;
-        bounds[k + 1] = f64::INFINITY;
-    }
-    k = 0;
-    for (q, o) in out.iter_mut().enumerate() {
-        while bounds[k + 1] < q as f64 {
-            k += 1;
-        }
-        let p = hull[k];
-        let d = q as f64 - p as f64;
-        *o = d * d + f[p];
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn brute(cells: &[bool], w: usize, h: usize) -> Vec<f32> {
-        (0..w * h)
-            .map(|i| {
-                if !cells[i] {
-                    return 0.0;
-                }
-                let (x, y) = ((i % w) as f64, (i / w) as f64);
-                (0..w * h)
-                    .filter(|&j| !cells[j])
-                    .map(|j| {
-                        let (a, b) = ((j % w) as f64 - x, (j / w) as f64 - y);
-                        libm::sqrt(a * a + b * b)
-                    })
-                    .fold(f64::MAX, f64::min) as f32
-            })
-            .collect()
-    }
-
-    #[test]
-    fn distance_transform_is_exact_against_brute_force() {
-        let mut rng = crate::rng::SplitMix64::new(3);
-        for _ in 0..20 {
-            let (w, h) = (3 + rng.below(14) as usize, 3 + rng.below(14) as usize);
-            let mut cells: Vec<bool> = (0..w * h).map(|_| rng.uniform() < 0.8).collect();
-            cells[0] = false;
-            assert_eq!(distance_transform(&cells, w, h), brute(&cells, w, h));
-        }
-    }
 
     #[test]
     fn a_line_five_cells_wide_measures_five_on_its_axis() {
