@@ -226,7 +226,7 @@ pub struct EvalArgs {
     #[arg(short, long, value_enum, value_delimiter = ',', value_name = "A,B,..")]
     pub algorithm: Vec<AlgorithmArg>,
     /// Also write one CSV row per frame (error, timings, visible nodes);
-    /// with several runs, one file each, suffixed .<sequence>.<algorithm>.csv.
+    /// with several runs, one file each, suffixed .SEQUENCE.ALGORITHM.csv.
     #[arg(long, value_name = "out.csv")]
     pub per_frame: Option<String>,
     #[allow(missing_docs)]
@@ -318,7 +318,7 @@ pub struct SynthArgs {
     /// The seed of the noise (and of the drawn scene).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// With random: write seeds SEED..SEED+N-1 into folders random-<seed>-<frames>f.
+    /// With random: write seeds SEED..SEED+N-1 into folders random-SEED-FRAMESf.
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=MAX_RANDOM_COUNT))]
     pub count: Option<u64>,
     /// Render at 1280x720 instead of 640x480.
