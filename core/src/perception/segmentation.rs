@@ -389,6 +389,25 @@ fn in_hue_sectors(sectors: &[u8; 6], r: u8, g: u8, b: u8) -> u8 {
         | (sectors[5] & rb & bg)
 }
 
+/// The second pre-test of [`segment`] on a block's channel lanes: `false`
+/// only when no pixel's saturation can reach `s_lo` or (with `UPPER`,
+/// for a range that stops below 255) stay below `s_hi_next`.
+#[inline(always)]
+fn may_be_saturated<const UPPER: bool>(
+    [r, g, b]: [&[u8; 3 * SEGMENT_BLOCK]; 3],
+    s_lo: u16,
+    s_hi_next: u16,
+) -> bool {
+    let mut saturated = 0u8;
+    for i in 0..3 * SEGMENT_BLOCK {
+        let (hi, lo) = (r[i].max(g[i]).max(b[i]), r[i].min(g[i]).min(b[i]));
+        let (v, diff) = (u16::from(hi), u16::from(hi - lo));
+        let within = 255 * diff + v >= s_lo * v && (!UPPER || 255 * diff <= s_hi_next * v);
+        saturated |= PIXEL_STARTS[i] & u8::from(within);
+    }
+    saturated != 0
+}
+
 /// Segments `frame` with `range` after setting the colour pixels inside each
 /// of `occlusions` to black (depth is left as it is). Value and saturation
 /// are tested together by one table lookup per pixel (`chroma_intervals`),
@@ -407,12 +426,14 @@ pub fn segment(frame: &Frame<'_>, range: &HsvRange, occlusions: &[Rect]) -> Mask
     // second, on 16 bits and only where the first found candidates, asks
     // for the saturation: OpenCV's is `255 diff / v` rounded, so a pixel
     // that passes has `255 diff / v > s_lo - 1`, that is
-    // `255 diff + v > s_lo v`. The third, on bytes and only where the
+    // `255 diff + v > s_lo v`, and `255 diff / v < s_hi + 1` (the bound
+    // that keeps a white rope's range off a saturated table). The third, on bytes and only where the
     // second found candidates, asks for the sixths of the hue circle the
     // hue range meets (`hue_sectors`): a table as saturated as the rope is
     // told from it by hue alone. All keep every pixel the exact test may take.
     let (v_lo, v_hi) = (range.lower[2], range.upper[2]);
     let s_lo = u16::from(range.lower[1]);
+    let s_hi_next = u16::from(range.upper[1]) + 1;
     let least_diff = chroma
         .iter()
         .filter(|c| c.1 > 0)
@@ -445,13 +466,12 @@ pub fn segment(frame: &Frame<'_>, range: &HsvRange, occlusions: &[Rect]) -> Mask
             if candidates == 0 {
                 continue;
             }
-            let mut saturated = 0u8;
-            for i in 0..3 * SEGMENT_BLOCK {
-                let (hi, lo) = (r[i].max(g[i]).max(b[i]), r[i].min(g[i]).min(b[i]));
-                let (v, diff) = (u16::from(hi), u16::from(hi - lo));
-                saturated |= PIXEL_STARTS[i] & u8::from(255 * diff + v >= s_lo * v);
-            }
-            if saturated == 0 {
+            let saturated = if s_hi_next <= 255 {
+                may_be_saturated::<true>([r, g, b], s_lo, s_hi_next)
+            } else {
+                may_be_saturated::<false>([r, g, b], s_lo, s_hi_next)
+            };
+            if !saturated {
                 continue;
             }
             if !all_hues {
@@ -812,6 +832,42 @@ mod tests {
                 upper: [179, 255, 255],
             };
             assert_eq!(segment(&f, &range, &[]).data, want, "s_lo {s_lo}");
+        }
+    }
+
+    /// The same at the upper saturation bound: a block of saturated red
+    /// (above every bound tried) with one pixel at the largest chroma
+    /// that stays within the bound is not skipped, for every value.
+    #[test]
+    fn a_lone_pixel_just_unsaturated_enough_keeps_its_block() {
+        for s_hi in (0..255).step_by(7) {
+            let mut color = Vec::new();
+            let mut want = Vec::new();
+            for v in 0..=255i32 {
+                let Some(d) = (0..=v).rev().find(|&d| saturation(v, d) <= s_hi) else {
+                    continue;
+                };
+                let mut block = [[200u8, 0, 0]; SEGMENT_BLOCK];
+                block[11] = [v as u8, (v - d) as u8, (v - d) as u8];
+                color.extend(block.iter().flatten());
+                want.extend((0..SEGMENT_BLOCK).map(|i| i == 11));
+            }
+            color.extend([200u8, 0, 0].repeat(SEGMENT_BLOCK));
+            want.extend([false; SEGMENT_BLOCK]);
+            if want.len() % 2 == 1 {
+                color.extend([200u8, 0, 0]);
+                want.push(false);
+            }
+            // Two rows: blocks run on across rows, and one row would be
+            // wider than an image may be.
+            let n = want.len();
+            let depth = alloc::vec![0u16; n];
+            let f = Frame::new(n as u32 / 2, 2, &color, &depth, 0.001).expect("frame");
+            let range = HsvRange {
+                lower: [0, 0, 0],
+                upper: [179, s_hi as u8, 255],
+            };
+            assert_eq!(segment(&f, &range, &[]).data, want, "s_hi {s_hi}");
         }
     }
 
