@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Every check the project runs: formatting, lints, docs, all Rust tests, the
 # core built without std (thumbv7em) and for WebAssembly, and the browser
-# tests of the demo page. Installs what it needs (targets, wasm-bindgen-cli,
-# Chromium, playwright-core) when missing.
+# tests of the demo page, and the Python package's tests. Installs what it
+# needs (targets, wasm-bindgen-cli, Chromium, playwright-core, a Python venv
+# with maturin, numpy, pytest and pyrealsense2) when missing.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -42,3 +43,14 @@ if ! command -v chromium >/dev/null 2>&1; then
   apt-get update -qq && apt-get install -y -qq --no-install-recommends chromium >/dev/null
 fi
 (cd tests/browser && npm ci --no-audit --no-fund --silent && node run.mjs)
+
+echo "== Python package: pip install ./python into a venv, then pytest"
+if ! ldconfig -p | grep -q libusb-1.0; then
+  # pyrealsense2's runtime, for the example played from genuine recordings.
+  apt-get update -qq && apt-get install -y -qq --no-install-recommends libusb-1.0-0 >/dev/null
+fi
+venv=target/python-venv
+[ -x "$venv/bin/python" ] || python3 -m venv "$venv"
+"$venv/bin/pip" install --quiet --disable-pip-version-check numpy pytest pyrealsense2==2.59.1.11053
+"$venv/bin/pip" install --quiet --disable-pip-version-check --force-reinstall --no-deps ./python
+UPETRACK_BIN="$PWD/target/release/upetrack" "$venv/bin/python" -m pytest -q python/tests

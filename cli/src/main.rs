@@ -133,19 +133,17 @@ fn recording_options(topics: &args::TopicArgs) -> upetrack_recordings::Recording
 
 fn open_sequence(path: &str, rec: &RecordingArgs) -> Result<AnySequence, CliError> {
     let p = Path::new(path);
-    if p.is_file() && upetrack_io::recorded::is_recording_file(p) {
-        return Ok(upetrack_io::recorded::open_recording(
-            p,
-            rec.dlo.as_deref(),
-            &recording_options(&rec.topics),
-        )?);
-    }
-    if rec.dlo.is_some() {
+    let recording = p.is_file() && upetrack_io::recorded::is_recording_file(p);
+    if rec.dlo.is_some() && !recording {
         return Err(CliError::usage(format!(
             "{path}: --dlo is for recordings (.bag, .db3, .mcap); a sequence folder has its own dlo.json"
         )));
     }
-    Ok(Sequence::open(upetrack_io::open::open_path(p)?)?)
+    Ok(upetrack_io::recorded::open_any(
+        p,
+        rec.dlo.as_deref(),
+        &recording_options(&rec.topics),
+    )?)
 }
 
 fn cmd_track(args: &TrackArgs) -> Result<(), CliError> {

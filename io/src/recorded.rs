@@ -210,6 +210,26 @@ pub fn open_recording(
     recording_sequence(Box::new(files) as Box<dyn Source>, rec)
 }
 
+/// Any sequence the command reads: a camera recording (with `dlo`, its
+/// configuration), or a folder or `.zip` in the contract's layout (which
+/// has its own `dlo.json`, so `dlo` must be `None`).
+pub fn open_any(
+    path: &Path,
+    dlo: Option<&Path>,
+    options: &RecordingOptions,
+) -> Result<Sequence<Box<dyn Source>>, SequenceError> {
+    if path.is_file() && is_recording_file(path) {
+        return open_recording(path, dlo, options);
+    }
+    if dlo.is_some() {
+        return Err(SequenceError::invalid(
+            &path.display().to_string(),
+            "a dlo.json is for recordings (.bag, .db3, .mcap); a sequence folder has its own",
+        ));
+    }
+    Sequence::open(crate::open::open_path(path)?)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,0 +1,33 @@
+"""UPETrack: track a rope, cable or thread in RGB-D frames.
+
+The tracker steps on numpy arrays as pyrealsense2 gives them (uint8 H x W x 3
+RGB, uint16 H x W depth aligned to colour); `open` reads what the `upetrack`
+command reads (sequence folders, .zip, .bag, .db3, .mcap) and `track` runs a
+whole sequence as `upetrack track` does. Everything is the Rust core's.
+"""
+
+from ._upetrack import (
+    Intrinsics,
+    Sequence,
+    SequenceError,
+    StepResult,
+    Tracker,
+    TrackerError,
+    __version__,
+    algorithms,
+    open,
+    track,
+)
+
+__all__ = [
+    "Intrinsics",
+    "Sequence",
+    "SequenceError",
+    "StepResult",
+    "Tracker",
+    "TrackerError",
+    "__version__",
+    "algorithms",
+    "open",
+    "track",
+]

@@ -1,0 +1,462 @@
+//! Python bindings of the upetrack core (`import upetrack`): a tracker that
+//! steps on numpy arrays as pyrealsense2 gives them, and the sequences and
+//! recordings the command reads. Nothing is implemented twice: every rule
+//! is the core's or `upetrack-io`'s.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use numpy::{
+    PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray2, PyReadonlyArray3,
+    PyUntypedArrayMethods,
+};
+use pyo3::create_exception;
+use pyo3::exceptions::{PyIndexError, PyValueError};
+use pyo3::prelude::*;
+use upetrack::{Algorithm, CameraIntrinsics, Frame, HsvRange, Params, Rect};
+use upetrack_io::run::{frame_record, run_frame};
+use upetrack_io::{Sequence as IoSequence, SequenceError as IoSequenceError, Source};
+
+create_exception!(
+    upetrack,
+    TrackerError,
+    PyValueError,
+    "The tracker refused its settings or a frame (the core's message)."
+);
+create_exception!(
+    upetrack,
+    SequenceError,
+    PyValueError,
+    "A sequence or recording that cannot be read (the reader's message, naming the file)."
+);
+
+fn tracker_error(e: impl std::fmt::Display) -> PyErr {
+    TrackerError::new_err(e.to_string())
+}
+
+fn sequence_error(e: IoSequenceError) -> PyErr {
+    SequenceError::new_err(e.to_string())
+}
+
+/// A pinhole camera: image size and focal lengths and principal point in pixels.
+#[pyclass(module = "upetrack", frozen, get_all)]
+#[derive(Clone, Copy)]
+struct Intrinsics {
+    /// Image width, pixels.
+    width: u32,
+    /// Image height, pixels.
+    height: u32,
+    /// Focal length along x, pixels.
+    fx: f64,
+    /// Focal length along y, pixels.
+    fy: f64,
+    /// Principal point x, pixels.
+    cx: f64,
+    /// Principal point y, pixels.
+    cy: f64,
+}
+
+impl Intrinsics {
+    fn camera(&self) -> CameraIntrinsics {
+        CameraIntrinsics {
+            width: self.width,
+            height: self.height,
+            fx: self.fx,
+            fy: self.fy,
+            cx: self.cx,
+            cy: self.cy,
+        }
+    }
+}
+
+#[pymethods]
+impl Intrinsics {
+    #[new]
+    #[pyo3(signature = (width, height, fx, fy, cx, cy))]
+    fn new(width: u32, height: u32, fx: f64, fy: f64, cx: f64, cy: f64) -> PyResult<Self> {
+        let i = Self {
+            width,
+            height,
+            fx,
+            fy,
+            cx,
+            cy,
+        };
+        i.camera().validate().map_err(tracker_error)?;
+        Ok(i)
+    }
+
+    /// The intrinsics of a pyrealsense2 stream profile
+    /// (`profile.as_video_stream_profile().get_intrinsics()`: `width`,
+    /// `height`, `fx`, `fy`, `ppx`, `ppy`).
+    #[staticmethod]
+    fn from_realsense(intrinsics: &Bound<'_, PyAny>) -> PyResult<Self> {
+        Self::new(
+            intrinsics.getattr("width")?.extract()?,
+            intrinsics.getattr("height")?.extract()?,
+            intrinsics.getattr("fx")?.extract()?,
+            intrinsics.getattr("fy")?.extract()?,
+            intrinsics.getattr("ppx")?.extract()?,
+            intrinsics.getattr("ppy")?.extract()?,
+        )
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Intrinsics(width={}, height={}, fx={}, fy={}, cx={}, cy={})",
+            self.width, self.height, self.fx, self.fy, self.cx, self.cy
+        )
+    }
+}
+
+/// Parameters from `None` (the defaults), a preset name (`"default"`,
+/// `"paper"`) or a dict of any subset of the fields (the parameter file's
+/// rules and messages).
+fn params_of(params: Option<&Bound<'_, PyAny>>) -> PyResult<Params> {
+    let Some(params) = params else {
+        return Ok(Params::default());
+    };
+    if let Ok(name) = params.extract::<String>() {
+        return Params::preset(&name).ok_or_else(|| {
+            PyValueError::new_err(format!("params: no preset named `{name}` (default, paper)"))
+        });
+    }
+    let json = params.py().import("json")?;
+    let text: String = json.call_method1("dumps", (params,))?.extract()?;
+    upetrack_io::params_file::parse_params(&text, "params")
+        .map_err(|e| PyValueError::new_err(e.to_string()))
+}
+
+fn algorithm_of(name: Option<&str>, params: Params) -> PyResult<Params> {
+    let Some(name) = name else {
+        return Ok(params);
+    };
+    let algorithm = Algorithm::from_name(name).ok_or_else(|| {
+        let names: Vec<&str> = Algorithm::ALL.iter().map(|a| a.name()).collect();
+        PyValueError::new_err(format!(
+            "algorithm: `{name}` is not one of {}",
+            names.join(", ")
+        ))
+    })?;
+    Ok(Params {
+        algorithm,
+        ..params
+    })
+}
+
+/// An HSV box as Python gives it: `((h, s, v), (h, s, v))`, lower then upper.
+type HsvTuple = ((u8, u8, u8), (u8, u8, u8));
+
+/// A decoded frame as numpy arrays: colour H x W x 3, depth H x W.
+type FrameArrays<'py> = (Bound<'py, PyArray3<u8>>, Bound<'py, PyArray2<u16>>);
+
+/// Rectangles `(x, y, w, h)` as the core's.
+fn rects(r: Vec<(i64, i64, i64, i64)>) -> Vec<Rect> {
+    r.into_iter()
+        .map(|(x, y, w, h)| Rect { x, y, w, h })
+        .collect()
+}
+
+/// What one step gives: the nodes (M x 3, metres, camera frame), which
+/// are visible, whether the rope is lost and why, and the stages' times.
+#[pyclass(module = "upetrack", frozen, get_all)]
+struct StepResult {
+    /// M x 3 float64, metres, in the colour camera's frame.
+    nodes: Py<PyArray2<f64>>,
+    /// M bool: the node is on rope points in this frame.
+    visible: Py<PyArray1<bool>>,
+    /// The rope could not be tracked on this frame (the nodes are the last known).
+    lost: bool,
+    /// Why it is lost, else None.
+    reason: Option<String>,
+    /// The state was found again from the images on this frame.
+    recovered: bool,
+    /// Segmentation, ms.
+    segment_ms: f64,
+    /// Point cloud, ms.
+    cloud_ms: f64,
+    /// Tracking step, ms.
+    track_ms: f64,
+    /// Segmentation, cloud and step, ms.
+    total_ms: f64,
+}
+
+#[pymethods]
+impl StepResult {
+    fn __repr__(&self, py: Python<'_>) -> String {
+        let n = self.visible.bind(py).len();
+        format!(
+            "StepResult({n} nodes, lost={}, total_ms={:.3})",
+            if self.lost { "True" } else { "False" },
+            self.total_ms
+        )
+    }
+}
+
+/// Tracks one rope in aligned colour and depth frames of one camera.
+///
+/// `Tracker(intrinsics, params=None, algorithm=None, depth_scale=0.001,
+/// hsv=((90, 90, 30), (130, 255, 255)), occlusions=())`: `params` a dict of
+/// any subset of the parameters or a preset name; `algorithm` one of
+/// "upetrack", "cpd", "trackdlo", "cdcpd2"; `depth_scale` metres per depth
+/// unit; `hsv` the rope's colour range in OpenCV's convention; `occlusions`
+/// rectangles `(x, y, w, h)` blacked out on every frame.
+#[pyclass(module = "upetrack")]
+struct Tracker {
+    inner: upetrack::Tracker,
+    camera: CameraIntrinsics,
+    depth_scale: f64,
+    occlusions: Vec<Rect>,
+}
+
+#[pymethods]
+impl Tracker {
+    #[new]
+    #[pyo3(signature = (intrinsics, params=None, algorithm=None, depth_scale=0.001, hsv=None, occlusions=Vec::new()))]
+    fn new(
+        intrinsics: &Intrinsics,
+        params: Option<&Bound<'_, PyAny>>,
+        algorithm: Option<&str>,
+        depth_scale: f64,
+        hsv: Option<HsvTuple>,
+        occlusions: Vec<(i64, i64, i64, i64)>,
+    ) -> PyResult<Self> {
+        let params = algorithm_of(algorithm, params_of(params)?)?;
+        if !(depth_scale > 0.0 && depth_scale.is_finite()) {
+            return Err(PyValueError::new_err(format!(
+                "depth_scale: {depth_scale} is not a positive number of metres per unit"
+            )));
+        }
+        let hsv = hsv.map_or_else(HsvRange::default, |((a, b, c), (d, e, f))| HsvRange {
+            lower: [a, b, c],
+            upper: [d, e, f],
+        });
+        let camera = intrinsics.camera();
+        let inner = upetrack::Tracker::new(params, camera, hsv).map_err(tracker_error)?;
+        Ok(Self {
+            inner,
+            camera,
+            depth_scale,
+            occlusions: rects(occlusions),
+        })
+    }
+
+    /// Tracks one frame: `color` uint8 H x W x 3 RGB, `depth` uint16 H x W in
+    /// depth units, aligned to colour (pyrealsense2's `rs.align`);
+    /// `occlusions`, rectangles `(x, y, w, h)` for this frame only, replace
+    /// the tracker's. The GIL is released while the frame is tracked.
+    #[pyo3(signature = (color, depth, occlusions=None))]
+    fn step(
+        &mut self,
+        py: Python<'_>,
+        color: PyReadonlyArray3<'_, u8>,
+        depth: PyReadonlyArray2<'_, u16>,
+        occlusions: Option<Vec<(i64, i64, i64, i64)>>,
+    ) -> PyResult<StepResult> {
+        let (w, h) = (self.camera.width as usize, self.camera.height as usize);
+        if color.shape() != [h, w, 3] {
+            return Err(PyValueError::new_err(format!(
+                "color: shape {:?}, expected ({h}, {w}, 3) uint8 RGB",
+                color.shape()
+            )));
+        }
+        if depth.shape() != [h, w] {
+            return Err(PyValueError::new_err(format!(
+                "depth: shape {:?}, expected ({h}, {w}) uint16",
+                depth.shape()
+            )));
+        }
+        // `as_slice` takes Fortran order too, which would be read transposed.
+        let c_order = color.is_c_contiguous() && depth.is_c_contiguous();
+        let (true, Ok(rgb), Ok(z)) = (c_order, color.as_slice(), depth.as_slice()) else {
+            return Err(PyValueError::new_err(
+                "color and depth must be C-contiguous (numpy.ascontiguousarray)",
+            ));
+        };
+        let frame = Frame::new(
+            self.camera.width,
+            self.camera.height,
+            rgb,
+            z,
+            self.depth_scale,
+        )
+        .map_err(tracker_error)?;
+        let these: Option<Vec<Rect>> = occlusions.map(rects);
+        let (inner, occlusions) = (&mut self.inner, these.as_ref().unwrap_or(&self.occlusions));
+        let timed = py
+            .detach(|| {
+                let start = Instant::now();
+                let mut now = move || start.elapsed().as_secs_f64() * 1000.0;
+                run_frame(inner, &frame, occlusions, &mut now)
+            })
+            .map_err(tracker_error)?;
+        let record = frame_record(0, &timed);
+        let nodes: Vec<Vec<f64>> = record.nodes.iter().map(|p| p.to_vec()).collect();
+        Ok(StepResult {
+            nodes: PyArray2::from_vec2(py, &nodes)?.unbind(),
+            visible: PyArray1::from_slice(py, &record.visible).unbind(),
+            lost: record.lost,
+            reason: record.reason,
+            recovered: record.recovered,
+            segment_ms: timed.segment_ms,
+            cloud_ms: timed.cloud_ms,
+            track_ms: timed.track_ms,
+            total_ms: timed.total_ms,
+        })
+    }
+
+    /// Forgets the rope: the next frame finds it again.
+    fn reset(&mut self) {
+        self.inner.reset();
+    }
+}
+
+/// A sequence folder, a `.zip` of one, or a camera recording (`.bag`,
+/// `.db3`, `.mcap`, with `dlo` its configuration), opened as the command
+/// opens it. `len(seq)` frames; `seq[i]` is `(color, depth)` as numpy
+/// arrays; `seq.tracker()` a tracker with its camera, colour range and rope.
+#[pyclass(module = "upetrack", unsendable)]
+struct Sequence {
+    inner: IoSequence<Box<dyn Source>>,
+    path: String,
+}
+
+#[pymethods]
+impl Sequence {
+    fn __len__(&self) -> usize {
+        self.inner.len()
+    }
+
+    fn __getitem__<'py>(&self, py: Python<'py>, index: isize) -> PyResult<FrameArrays<'py>> {
+        let n = self.inner.len() as isize;
+        let i = if index < 0 { index + n } else { index };
+        if !(0..n).contains(&i) {
+            return Err(PyIndexError::new_err(format!("frame {index} of {n}")));
+        }
+        let d = self.inner.frame(i as usize).map_err(sequence_error)?;
+        let (h, w) = (d.height as usize, d.width as usize);
+        let color = PyArray1::from_vec(py, d.color).reshape([h, w, 3])?;
+        let depth = PyArray1::from_vec(py, d.depth).reshape([h, w])?;
+        Ok((color, depth))
+    }
+
+    /// The camera's intrinsics.
+    #[getter]
+    fn intrinsics(&self) -> Intrinsics {
+        let c = self.inner.camera;
+        Intrinsics {
+            width: c.width,
+            height: c.height,
+            fx: c.fx,
+            fy: c.fy,
+            cx: c.cx,
+            cy: c.cy,
+        }
+    }
+
+    /// Metres per depth unit.
+    #[getter]
+    fn depth_scale(&self) -> f64 {
+        self.inner.depth_scale
+    }
+
+    /// The rope's colour range, `((h, s, v), (h, s, v))` (OpenCV's convention).
+    #[getter]
+    fn hsv(&self) -> HsvTuple {
+        let ([a, b, c], [d, e, f]) = (self.inner.hsv.lower, self.inner.hsv.upper);
+        ((a, b, c), (d, e, f))
+    }
+
+    /// The occluder rectangles `(x, y, w, h)` in force on frame `index`.
+    fn occlusions_at(&self, index: usize) -> Vec<(i64, i64, i64, i64)> {
+        self.inner
+            .occlusions_at(index)
+            .into_iter()
+            .map(|r| (r.x, r.y, r.w, r.h))
+            .collect()
+    }
+
+    /// A tracker for this sequence (its camera, colour range and the rope
+    /// `dlo.json` describes), as the command builds it.
+    #[pyo3(signature = (params=None, algorithm=None))]
+    fn tracker(
+        &self,
+        params: Option<&Bound<'_, PyAny>>,
+        algorithm: Option<&str>,
+    ) -> PyResult<Tracker> {
+        let params = algorithm_of(algorithm, params_of(params)?)?;
+        let inner = self.inner.tracker(params).map_err(tracker_error)?;
+        Ok(Tracker {
+            inner,
+            camera: self.inner.camera,
+            depth_scale: self.inner.depth_scale,
+            occlusions: Vec::new(),
+        })
+    }
+
+    fn __repr__(&self) -> String {
+        format!("Sequence({:?}, {} frames)", self.path, self.inner.len())
+    }
+}
+
+/// Opens a sequence folder, a `.zip`, or a recording (`dlo`: its `dlo.json`).
+#[pyfunction]
+#[pyo3(signature = (path, dlo=None))]
+fn open(path: PathBuf, dlo: Option<PathBuf>) -> PyResult<Sequence> {
+    let inner = upetrack_io::recorded::open_any(&path, dlo.as_deref(), &Default::default())
+        .map_err(sequence_error)?;
+    Ok(Sequence {
+        inner,
+        path: path.display().to_string(),
+    })
+}
+
+/// Tracks every frame of a sequence as `upetrack track` does and returns
+/// the result JSON's text (written to `out` too when given).
+#[pyfunction]
+#[pyo3(signature = (path, out=None, params=None, algorithm=None, dlo=None))]
+fn track(
+    py: Python<'_>,
+    path: PathBuf,
+    out: Option<PathBuf>,
+    params: Option<&Bound<'_, PyAny>>,
+    algorithm: Option<&str>,
+    dlo: Option<PathBuf>,
+) -> PyResult<String> {
+    let params = algorithm_of(algorithm, params_of(params)?)?;
+    let seq = upetrack_io::recorded::open_any(&path, dlo.as_deref(), &Default::default())
+        .map_err(sequence_error)?;
+    let start = Instant::now();
+    let result = upetrack_io::run::track_sequence(&seq, params, &mut move || {
+        start.elapsed().as_secs_f64() * 1000.0
+    })
+    .map_err(sequence_error)?;
+    if let Some(out) = out {
+        upetrack_io::write::write_json(&out, &result).map_err(sequence_error)?;
+    }
+    let _ = py;
+    serde_json::to_string_pretty(&result).map_err(|e| SequenceError::new_err(e.to_string()))
+}
+
+/// The names of the tracking algorithms.
+#[pyfunction]
+fn algorithms() -> Vec<&'static str> {
+    Algorithm::ALL.iter().map(|a| a.name()).collect()
+}
+
+/// The extension module, `upetrack._upetrack` (`import upetrack` re-exports it).
+#[pymodule]
+#[pyo3(name = "_upetrack")]
+fn upetrack_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add_class::<Intrinsics>()?;
+    m.add_class::<Tracker>()?;
+    m.add_class::<StepResult>()?;
+    m.add_class::<Sequence>()?;
+    m.add_function(wrap_pyfunction!(open, m)?)?;
+    m.add_function(wrap_pyfunction!(track, m)?)?;
+    m.add_function(wrap_pyfunction!(algorithms, m)?)?;
+    m.add("TrackerError", m.py().get_type::<TrackerError>())?;
+    m.add("SequenceError", m.py().get_type::<SequenceError>())?;
+    Ok(())
+}

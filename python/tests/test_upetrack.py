@@ -1,0 +1,154 @@
+"""The package against the command: same nodes to the last bit, and a
+Python exception (never a crash) for every bad array and parameter."""
+
+import json
+import os
+import subprocess
+import types
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import upetrack
+
+ROOT = Path(__file__).resolve().parents[2]
+SAMPLE = ROOT / "samples" / "dynamic-pull"
+
+
+def command():
+    """The `upetrack` binary: $UPETRACK_BIN, else the release build."""
+    path = os.environ.get("UPETRACK_BIN", str(ROOT / "target" / "release" / "upetrack"))
+    if not Path(path).exists():
+        pytest.skip(f"no upetrack binary at {path} (cargo build --release -p upetrack-cli)")
+    return path
+
+
+def untimed(result):
+    for f in result["frames"]:
+        f.pop("track_ms")
+        f.pop("total_ms")
+    return result
+
+
+def test_stepping_gives_the_commands_nodes_to_the_last_bit(tmp_path):
+    out = tmp_path / "result.json"
+    subprocess.run([command(), "-q", "track", str(SAMPLE), "--out", str(out)], check=True)
+    theirs = json.loads(out.read_text())["frames"]
+    seq = upetrack.open(SAMPLE)
+    tracker = seq.tracker()
+    assert len(seq) == len(theirs)
+    for i in range(len(seq)):
+        color, depth = seq[i]
+        r = tracker.step(color, depth, occlusions=seq.occlusions_at(i))
+        assert r.nodes.tolist() == theirs[i]["nodes"], f"frame {i}"
+        assert r.visible.tolist() == theirs[i]["visible"], f"frame {i}"
+        assert r.lost == theirs[i].get("lost", False)
+
+
+def test_track_writes_the_commands_result(tmp_path):
+    ours, theirs = tmp_path / "ours.json", tmp_path / "theirs.json"
+    subprocess.run([command(), "-q", "track", str(SAMPLE), "--out", str(theirs),
+                    "--algorithm", "trackdlo"], check=True)
+    text = upetrack.track(SAMPLE, out=ours, algorithm="trackdlo")
+    assert untimed(json.loads(text)) == untimed(json.loads(ours.read_text()))
+    assert untimed(json.loads(ours.read_text())) == untimed(json.loads(theirs.read_text()))
+
+
+def test_arrays_as_pyrealsense2_gives_them():
+    seq = upetrack.open(SAMPLE)
+    color, depth = seq[0]
+    assert color.dtype == np.uint8 and color.shape == (480, 640, 3)
+    assert depth.dtype == np.uint16 and depth.shape == (480, 640)
+    r = seq.tracker().step(color, depth)
+    assert r.nodes.dtype == np.float64 and r.nodes.shape == (24, 3)
+    assert r.visible.dtype == np.bool_ and r.visible.shape == (24,)
+    assert not r.lost and r.reason is None
+    assert r.total_ms >= r.track_ms >= 0.0
+
+
+@pytest.mark.parametrize(
+    "make, error, words",
+    [
+        (lambda c, d: (c.astype(np.float32), d), TypeError, "uint8"),
+        (lambda c, d: (c, d.astype(np.int32)), TypeError, "uint16"),
+        (lambda c, d: (c[:, :, :2].copy(), d), ValueError, "shape"),
+        (lambda c, d: (c[:-1].copy(), d), ValueError, "shape"),
+        (lambda c, d: (c, d[:, :-1].copy()), ValueError, "shape"),
+        (lambda c, d: (np.zeros((0, 0, 3), np.uint8), np.zeros((0, 0), np.uint16)), ValueError, "shape"),
+        (lambda c, d: (c, np.asfortranarray(d)), ValueError, "contiguous"),
+        (lambda c, d: (np.ascontiguousarray(c[::-1, :, :])[:, ::1, :], d[::-1, :]), ValueError, "contiguous"),
+        (lambda c, d: (c[0], d), TypeError, "dimensionality"),
+    ],
+)
+def test_bad_arrays_are_exceptions(make, error, words):
+    seq = upetrack.open(SAMPLE)
+    tracker = seq.tracker()
+    color, depth = make(*seq[0])
+    with pytest.raises(error, match=words):
+        tracker.step(color, depth)
+    # The tracker is unharmed.
+    c, d = seq[0]
+    assert not tracker.step(c, d).lost
+
+
+def test_bad_parameters_name_the_field():
+    intr = upetrack.Intrinsics(640, 480, 615.0, 615.0, 320.0, 240.0)
+    with pytest.raises(ValueError, match="node_count"):
+        upetrack.Tracker(intr, params={"node_count": 1})
+    with pytest.raises(ValueError, match="no_such_field"):
+        upetrack.Tracker(intr, params={"no_such_field": 1})
+    with pytest.raises(ValueError, match="preset"):
+        upetrack.Tracker(intr, params="fastest")
+    with pytest.raises(ValueError, match="cdcpd2"):
+        upetrack.Tracker(intr, algorithm="gltp")
+    with pytest.raises(ValueError, match="depth_scale"):
+        upetrack.Tracker(intr, depth_scale=float("nan"))
+    with pytest.raises(upetrack.TrackerError):
+        upetrack.Tracker(intr, hsv=((200, 0, 0), (10, 255, 255)))
+    with pytest.raises(upetrack.TrackerError):
+        upetrack.Intrinsics(640, 480, 0.0, 615.0, 320.0, 240.0)
+    assert upetrack.Tracker(intr, params="paper", algorithm="cpd") is not None
+
+
+def test_intrinsics_from_a_realsense_profile():
+    rs = types.SimpleNamespace(width=848, height=480, fx=421.5, fy=421.0, ppx=424.2, ppy=239.1)
+    i = upetrack.Intrinsics.from_realsense(rs)
+    assert (i.width, i.height, i.fx, i.fy, i.cx, i.cy) == (848, 480, 421.5, 421.0, 424.2, 239.1)
+
+
+def test_sources_that_cannot_be_read_are_sequence_errors(tmp_path):
+    with pytest.raises(upetrack.SequenceError, match="no-such"):
+        upetrack.open(tmp_path / "no-such")
+    with pytest.raises(upetrack.SequenceError, match="dlo"):
+        upetrack.open(SAMPLE, dlo=tmp_path / "dlo.json")
+    seq = upetrack.open(SAMPLE)
+    with pytest.raises(IndexError):
+        seq[len(seq)]
+    assert seq[-1][0].shape == (480, 640, 3)
+
+
+def test_the_algorithms_are_the_cores():
+    assert upetrack.algorithms() == ["upetrack", "cpd", "trackdlo", "cdcpd2"]
+
+
+RECORDINGS = ROOT / "tests" / "recordings"
+
+
+@pytest.mark.parametrize("recording", ["librealsense.db3", "librealsense.bag"])
+def test_the_realsense_example_runs_on_genuine_recordings(recording, capsys):
+    """The live-loop example, played from librealsense's own recordings
+    (pyrealsense2's `enable_device_from_file` and `rs.align`)."""
+    if os.environ.get("CI"):
+        import pyrealsense2  # noqa: F401 (CI installs it: never skipped there)
+    else:
+        pytest.importorskip("pyrealsense2")
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("realsense_live", ROOT / "python" / "examples" / "realsense_live.py")
+    example = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(example)
+    tracked = example.main(["--bag", str(RECORDINGS / recording), "--headless"])
+    lines = capsys.readouterr().out.splitlines()
+    assert tracked >= 7 and len(lines) == tracked
+    assert all("visible nodes" in line for line in lines), lines
