@@ -158,6 +158,10 @@ impl FrameReader for OpenRecording {
         OpenRecording::frame(self, index)
     }
 
+    fn time_s(&self, index: usize) -> Option<f64> {
+        self.rec.time_ns(index).map(|ns| ns as f64 / 1e9)
+    }
+
     fn info(&self) -> RecordingInfo {
         OpenRecording::info(self)
     }
@@ -245,6 +249,10 @@ mod tests {
 
         fn info(&self) -> RecordingInfo {
             RecordingInfo::default()
+        }
+
+        fn time_s(&self, _: usize) -> Option<f64> {
+            None
         }
     }
 

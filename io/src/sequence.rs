@@ -265,6 +265,8 @@ pub trait FrameReader {
     fn frame(&mut self, index: usize) -> Result<DecodedFrame, SequenceError>;
     /// What the recording holds, for `upetrack info` and the page.
     fn info(&self) -> RecordingInfo;
+    /// When frame `index` was taken, seconds from the recording's first message.
+    fn time_s(&self, index: usize) -> Option<f64>;
 }
 
 /// An opened sequence: metadata read and checked, frames decoded on demand.
@@ -637,6 +639,16 @@ impl<S: Source> Sequence<S> {
         let mut t = Tracker::new(params, self.camera, self.hsv)?;
         t.set_rope_prior(self.rope_prior())?;
         Ok(t)
+    }
+
+    /// When frame `index` was taken, seconds: a recording's own colour
+    /// time from its first message, else the index over the frame rate
+    /// (a folder's frames are evenly spaced at `dlo.json`'s `fps`).
+    pub fn time_s(&self, index: usize) -> f64 {
+        self.reader
+            .as_ref()
+            .and_then(|r| r.borrow().time_s(index))
+            .unwrap_or(index as f64 / self.fps)
     }
 
     /// How messages name frame `index`: its colour file.

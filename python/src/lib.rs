@@ -340,6 +340,31 @@ impl Sequence {
         Ok((color, depth))
     }
 
+    /// When frame `index` was taken, seconds: a recording's own colour
+    /// time from its first message; a folder's frames at its frame rate
+    /// from 0.
+    fn time(&self, index: usize) -> PyResult<f64> {
+        if index >= self.inner.len() {
+            return Err(PyIndexError::new_err(format!(
+                "frame {index} of {}",
+                self.inner.len()
+            )));
+        }
+        Ok(self.inner.time_s(index))
+    }
+
+    /// Frames per second (`dlo.json`'s, or the recording's).
+    #[getter]
+    fn fps(&self) -> f64 {
+        self.inner.fps
+    }
+
+    /// Every frame in order as `(time, (color, depth))`: seconds, then
+    /// uint8 H x W x 3 RGB and uint16 H x W.
+    fn frames(slf: Py<Self>) -> Frames {
+        Frames { seq: slf, next: 0 }
+    }
+
     /// The camera's intrinsics.
     #[getter]
     fn intrinsics(&self) -> Intrinsics {
@@ -399,6 +424,33 @@ impl Sequence {
     }
 }
 
+/// The frames of a [`Sequence`] in order, as `(time, (color, depth))`.
+#[pyclass(module = "upetrack", unsendable)]
+struct Frames {
+    seq: Py<Sequence>,
+    next: usize,
+}
+
+#[pymethods]
+impl Frames {
+    fn __iter__(slf: PyRef<'_, Self>) -> PyRef<'_, Self> {
+        slf
+    }
+
+    fn __next__<'py>(&mut self, py: Python<'py>) -> PyResult<Option<(f64, FrameArrays<'py>)>> {
+        let seq = self.seq.borrow(py);
+        if self.next >= seq.inner.len() {
+            return Ok(None);
+        }
+        let i = self.next;
+        self.next += 1;
+        Ok(Some((
+            seq.inner.time_s(i),
+            seq.__getitem__(py, i as isize)?,
+        )))
+    }
+}
+
 /// Opens a sequence folder, a `.zip`, or a recording (`dlo`: its `dlo.json`).
 #[pyfunction]
 #[pyo3(signature = (path, dlo=None))]
@@ -453,6 +505,7 @@ fn upetrack_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Tracker>()?;
     m.add_class::<StepResult>()?;
     m.add_class::<Sequence>()?;
+    m.add_class::<Frames>()?;
     m.add_function(wrap_pyfunction!(open, m)?)?;
     m.add_function(wrap_pyfunction!(track, m)?)?;
     m.add_function(wrap_pyfunction!(algorithms, m)?)?;

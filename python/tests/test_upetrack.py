@@ -14,6 +14,7 @@ import upetrack
 
 ROOT = Path(__file__).resolve().parents[2]
 SAMPLE = ROOT / "samples" / "dynamic-pull"
+RECORDINGS = ROOT / "tests" / "recordings"
 
 
 def command():
@@ -128,11 +129,26 @@ def test_sources_that_cannot_be_read_are_sequence_errors(tmp_path):
     assert seq[-1][0].shape == (480, 640, 3)
 
 
+def test_frames_come_with_their_times():
+    seq = upetrack.open(SAMPLE)
+    times = [t for t, _ in seq.frames()]
+    assert len(times) == len(seq)
+    assert times == [i / seq.fps for i in range(len(seq))]
+    t, (color, depth) = next(iter(seq.frames()))
+    assert t == 0.0 and color.shape == (480, 640, 3) and depth.shape == (480, 640)
+    with pytest.raises(IndexError):
+        seq.time(len(seq))
+    rec = upetrack.open(RECORDINGS / "librealsense.db3", dlo=RECORDINGS / "dlo.json")
+    stamps = [rec.time(i) for i in range(len(rec))]
+    # The recording's own colour times, from its first message: rising, about
+    # a frame period apart.
+    assert 0.0 <= stamps[0] < 1.0 / rec.fps
+    steps = [b - a for a, b in zip(stamps, stamps[1:])]
+    assert all(0.5 / rec.fps < d < 2.0 / rec.fps for d in steps), (stamps, rec.fps)
+
+
 def test_the_algorithms_are_the_cores():
     assert upetrack.algorithms() == ["upetrack", "cpd", "trackdlo", "cdcpd2"]
-
-
-RECORDINGS = ROOT / "tests" / "recordings"
 
 
 @pytest.mark.parametrize("recording", ["librealsense.db3", "librealsense.bag"])

@@ -68,14 +68,27 @@ class Tracker:
     def reset(self) -> None:
         """Forget the rope: the next frame finds it again."""
 
+Arrays = Tuple[npt.NDArray[np.uint8], npt.NDArray[np.uint16]]
+
+class Frames:
+    """The frames of a sequence in order, as (time in seconds, (color, depth))."""
+
+    def __iter__(self) -> "Frames": ...
+    def __next__(self) -> Tuple[float, Arrays]: ...
+
 class Sequence:
     """A sequence folder, .zip or recording, opened as the command opens it."""
 
     intrinsics: Intrinsics
     depth_scale: float
+    fps: float
     hsv: Hsv
     def __len__(self) -> int: ...
-    def __getitem__(self, index: int) -> Tuple[npt.NDArray[np.uint8], npt.NDArray[np.uint16]]: ...
+    def __getitem__(self, index: int) -> Arrays: ...
+    def time(self, index: int) -> float:
+        """Seconds: a recording's own colour time from its first message; a folder's frames at its rate from 0."""
+    def frames(self) -> Frames:
+        """Every frame in order as (time, (color, depth))."""
     def occlusions_at(self, index: int) -> list[Rect]: ...
     def tracker(self, params: Params = None, algorithm: Optional[str] = None) -> Tracker: ...
 
