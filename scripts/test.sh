@@ -51,6 +51,8 @@ if ! ldconfig -p | grep -q libusb-1.0; then
 fi
 venv=target/python-venv
 [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
-"$venv/bin/pip" install --quiet --disable-pip-version-check numpy pytest pyrealsense2==2.59.1.11053
+"$venv/bin/pip" install --quiet --disable-pip-version-check numpy pytest mypy pyrealsense2==2.59.1.11053
 "$venv/bin/pip" install --quiet --disable-pip-version-check --force-reinstall --no-deps ./python
 UPETRACK_BIN="$PWD/target/release/upetrack" "$venv/bin/python" -m pytest -q python/tests
+echo "== the type stubs against the built module (mypy's stubtest)"
+(cd python && "../$venv/bin/python" -m mypy.stubtest --ignore-disjoint-bases upetrack._upetrack)

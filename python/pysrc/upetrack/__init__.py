@@ -7,6 +7,7 @@ whole sequence as `upetrack track` does. Everything is the Rust core's.
 """
 
 from ._upetrack import (
+    Frames,
     Intrinsics,
     Sequence,
     SequenceError,
@@ -20,6 +21,7 @@ from ._upetrack import (
 )
 
 __all__ = [
+    "Frames",
     "Intrinsics",
     "Sequence",
     "SequenceError",
