@@ -186,6 +186,17 @@ pub struct ParamsArg {
     pub params: Option<String>,
 }
 
+/// The parameters, and the algorithms to run with them.
+#[derive(Debug, Clone, Default, Args)]
+pub struct AlgorithmsArgs {
+    /// Algorithms, comma-separated [default: the parameter file's, else upetrack].
+    #[arg(short, long, value_enum, value_delimiter = ',', value_name = "A,B,..")]
+    pub algorithm: Vec<AlgorithmArg>,
+    #[allow(missing_docs)]
+    #[command(flatten)]
+    pub params: ParamsArg,
+}
+
 /// Where a table is written besides standard output.
 #[derive(Debug, Clone, Default, Args)]
 pub struct TableOutputs {
@@ -222,16 +233,13 @@ pub struct EvalArgs {
     /// Sequences (folders, .zip files or recordings).
     #[arg(required = true)]
     pub sequences: Vec<String>,
-    /// Algorithms, comma-separated [default: the parameter file's, else upetrack].
-    #[arg(short, long, value_enum, value_delimiter = ',', value_name = "A,B,..")]
-    pub algorithm: Vec<AlgorithmArg>,
+    #[allow(missing_docs)]
+    #[command(flatten)]
+    pub runs: AlgorithmsArgs,
     /// Also write one CSV row per frame (error, timings, visible nodes);
     /// with several runs, one file each, suffixed .SEQUENCE.ALGORITHM.csv.
     #[arg(long, value_name = "out.csv")]
     pub per_frame: Option<String>,
-    #[allow(missing_docs)]
-    #[command(flatten)]
-    pub params: ParamsArg,
     #[allow(missing_docs)]
     #[command(flatten)]
     pub outputs: TableOutputs,
@@ -465,12 +473,9 @@ pub struct BenchArgs {
     /// Runs over the frames (the medians are over all of them).
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
     pub repeat: u32,
-    /// Algorithms, comma-separated [default: the parameter file's, else upetrack].
-    #[arg(short, long, value_enum, value_delimiter = ',', value_name = "A,B,..")]
-    pub algorithm: Vec<AlgorithmArg>,
     #[allow(missing_docs)]
     #[command(flatten)]
-    pub params: ParamsArg,
+    pub runs: AlgorithmsArgs,
     #[allow(missing_docs)]
     #[command(flatten)]
     pub recording: RecordingArgs,

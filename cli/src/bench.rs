@@ -13,7 +13,7 @@ use upetrack_io::run::run_frame;
 use upetrack_synth::{Scenario, ScenarioKind, Variant};
 
 use crate::args::BenchArgs;
-use crate::{algorithms, load_params, open_sequence, with_algorithm, CliError};
+use crate::{open_sequence, with_algorithm, CliError};
 
 /// Frames decoded or rendered, then timed.
 struct Prepared {
@@ -105,8 +105,7 @@ pub fn cmd_bench(args: &BenchArgs) -> Result<(), CliError> {
             });
         }
     }
-    let params = load_params(args.params.params.as_deref())?;
-    let algorithms = algorithms(&args.algorithm, &params);
+    let (params, algorithms) = args.runs.resolve()?;
     println!("| data | algorithm | size | frames x runs | median read+decode | median segmentation | median cloud | median tracking step | median whole frame | p90 whole frame |");
     println!("|---|---|---|---:|---:|---:|---:|---:|---:|---:|");
     for p in &sets {

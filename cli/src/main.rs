@@ -111,6 +111,14 @@ fn algorithms(chosen: &[AlgorithmArg], params: &Params) -> Vec<Algorithm> {
     }
 }
 
+impl args::AlgorithmsArgs {
+    /// The parameters in force and the algorithms to run with them.
+    fn resolve(&self) -> Result<(Params, Vec<Algorithm>), CliError> {
+        let params = load_params(self.params.params.as_deref())?;
+        Ok((params, algorithms(&self.algorithm, &params)))
+    }
+}
+
 /// `params` with `algorithm` as the tracking step.
 fn with_algorithm(params: Params, algorithm: Algorithm) -> Params {
     Params {
@@ -133,8 +141,8 @@ fn recording_options(topics: &args::TopicArgs) -> upetrack_recordings::Recording
 
 fn open_sequence(path: &str, rec: &RecordingArgs) -> Result<AnySequence, CliError> {
     let p = Path::new(path);
-    let recording = p.is_file() && upetrack_io::recorded::is_recording_file(p);
-    if rec.dlo.is_some() && !recording {
+    // Only with --dlo: telling a recording by its bytes reads the file's head.
+    if rec.dlo.is_some() && !(p.is_file() && upetrack_io::recorded::is_recording_file(p)) {
         return Err(CliError::usage(format!(
             "{path}: --dlo is for recordings (.bag, .db3, .mcap); a sequence folder has its own dlo.json"
         )));
@@ -252,8 +260,7 @@ fn markdown_table(rows: &[Summary]) -> String {
 }
 
 fn cmd_eval(args: &EvalArgs) -> Result<(), CliError> {
-    let params = load_params(args.params.params.as_deref())?;
-    let algorithms = algorithms(&args.algorithm, &params);
+    let (params, algorithms) = args.runs.resolve()?;
     let several = args.sequences.len() > 1 || algorithms.len() > 1;
     let runs = args.sequences.len() * algorithms.len();
     let mut rows = Vec::new();

@@ -25,6 +25,15 @@ fn commands() -> Vec<String> {
         .collect()
 }
 
+/// Runs the command and returns its exit code and standard error.
+fn exit(args: &[&str]) -> (Option<i32>, String) {
+    let out = run(args);
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
 /// Options each command's help must name (a sample that catches a command
 /// losing its options or another's).
 const OPTIONS: [(&str, &[&str]); 12] = [
@@ -97,7 +106,7 @@ fn version_is_the_packages() {
 
 #[test]
 fn an_unknown_option_is_a_usage_error_with_a_suggestion() {
-    let out = run(&[
+    let (code, err) = exit(&[
         "track",
         "samples/static-s",
         "--out",
@@ -105,21 +114,18 @@ fn an_unknown_option_is_a_usage_error_with_a_suggestion() {
         "--algoritm",
         "cpd",
     ]);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert_eq!(code, Some(2), "{err}");
     assert!(
         err.contains("'--algoritm'") && err.contains("'--algorithm'"),
         "{err}"
     );
 
-    let out = run(&["trak"]);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{err}");
+    let (code, err) = exit(&["trak"]);
+    assert_eq!(code, Some(2), "{err}");
     assert!(err.contains("'track'"), "{err}");
 
-    let out = run(&["eval", "x", "--algorithm", "upetrak"]);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{err}");
+    let (code, err) = exit(&["eval", "x", "--algorithm", "upetrak"]);
+    assert_eq!(code, Some(2), "{err}");
     assert!(err.contains("upetrack, cpd, trackdlo, cdcpd2"), "{err}");
 }
 
@@ -141,21 +147,15 @@ fn options_that_do_not_go_together_are_usage_errors() {
             "dlo.json",
         ],
     ] {
-        let out = run(&args);
-        assert_eq!(
-            out.status.code(),
-            Some(2),
-            "{args:?}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        let (code, err) = exit(&args);
+        assert_eq!(code, Some(2), "{args:?}: {err}");
     }
 }
 
 #[test]
 fn bad_input_exits_with_1_naming_the_file() {
-    let out = run(&["track", "/no/such/sequence", "--out", "x.json"]);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "{err}");
+    let (code, err) = exit(&["track", "/no/such/sequence", "--out", "x.json"]);
+    assert_eq!(code, Some(1), "{err}");
     assert!(err.contains("/no/such/sequence"), "{err}");
 }
 

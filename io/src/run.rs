@@ -127,7 +127,7 @@ impl SequenceRun {
         occlusions: &[upetrack::Rect],
         name: &str,
         now_ms: &mut dyn FnMut() -> f64,
-    ) -> Result<&FrameRecord, SequenceError> {
+    ) -> Result<(), SequenceError> {
         let frame = decoded
             .frame(self.depth_scale)
             .map_err(|e| SequenceError::invalid(name, e.to_string()))?;
@@ -140,7 +140,7 @@ impl SequenceRun {
         )
         .map_err(|e| SequenceError::invalid(name, e.to_string()))?;
         self.records.push(record);
-        Ok(&self.records[self.records.len() - 1])
+        Ok(())
     }
 
     /// The result of the frames pushed so far.

@@ -56,6 +56,25 @@ struct Intrinsics {
     cy: f64,
 }
 
+impl From<CameraIntrinsics> for Intrinsics {
+    fn from(c: CameraIntrinsics) -> Self {
+        Self {
+            width: c.width,
+            height: c.height,
+            fx: c.fx,
+            fy: c.fy,
+            cx: c.cx,
+            cy: c.cy,
+        }
+    }
+}
+
+/// A clock in milliseconds since now (the core has none).
+fn clock_ms() -> impl FnMut() -> f64 {
+    let start = Instant::now();
+    move || start.elapsed().as_secs_f64() * 1000.0
+}
+
 impl Intrinsics {
     fn camera(&self) -> CameraIntrinsics {
         CameraIntrinsics {
@@ -204,7 +223,6 @@ impl StepResult {
 #[pyclass(module = "upetrack")]
 struct Tracker {
     inner: upetrack::Tracker,
-    camera: CameraIntrinsics,
     depth_scale: f64,
     occlusions: Vec<Rect>,
 }
@@ -231,11 +249,10 @@ impl Tracker {
             lower: [a, b, c],
             upper: [d, e, f],
         });
-        let camera = intrinsics.camera();
-        let inner = upetrack::Tracker::new(params, camera, hsv).map_err(tracker_error)?;
+        let inner =
+            upetrack::Tracker::new(params, intrinsics.camera(), hsv).map_err(tracker_error)?;
         Ok(Self {
             inner,
-            camera,
             depth_scale,
             occlusions: rects(occlusions),
         })
@@ -253,7 +270,8 @@ impl Tracker {
         depth: PyReadonlyArray2<'_, u16>,
         occlusions: Option<Vec<(i64, i64, i64, i64)>>,
     ) -> PyResult<StepResult> {
-        let (w, h) = (self.camera.width as usize, self.camera.height as usize);
+        let camera = *self.inner.camera();
+        let (w, h) = (camera.width as usize, camera.height as usize);
         if color.shape() != [h, w, 3] {
             return Err(PyValueError::new_err(format!(
                 "color: shape {:?}, expected ({h}, {w}, 3) uint8 RGB",
@@ -273,22 +291,12 @@ impl Tracker {
                 "color and depth must be C-contiguous (numpy.ascontiguousarray)",
             ));
         };
-        let frame = Frame::new(
-            self.camera.width,
-            self.camera.height,
-            rgb,
-            z,
-            self.depth_scale,
-        )
-        .map_err(tracker_error)?;
+        let frame = Frame::new(camera.width, camera.height, rgb, z, self.depth_scale)
+            .map_err(tracker_error)?;
         let these: Option<Vec<Rect>> = occlusions.map(rects);
         let (inner, occlusions) = (&mut self.inner, these.as_ref().unwrap_or(&self.occlusions));
         let timed = py
-            .detach(|| {
-                let start = Instant::now();
-                let mut now = move || start.elapsed().as_secs_f64() * 1000.0;
-                run_frame(inner, &frame, occlusions, &mut now)
-            })
+            .detach(|| run_frame(inner, &frame, occlusions, &mut clock_ms()))
             .map_err(tracker_error)?;
         let record = frame_record(0, &timed);
         let nodes: Vec<Vec<f64>> = record.nodes.iter().map(|p| p.to_vec()).collect();
@@ -368,15 +376,7 @@ impl Sequence {
     /// The camera's intrinsics.
     #[getter]
     fn intrinsics(&self) -> Intrinsics {
-        let c = self.inner.camera;
-        Intrinsics {
-            width: c.width,
-            height: c.height,
-            fx: c.fx,
-            fy: c.fy,
-            cx: c.cx,
-            cy: c.cy,
-        }
+        self.inner.camera.into()
     }
 
     /// Metres per depth unit.
@@ -413,7 +413,6 @@ impl Sequence {
         let inner = self.inner.tracker(params).map_err(tracker_error)?;
         Ok(Tracker {
             inner,
-            camera: self.inner.camera,
             depth_scale: self.inner.depth_scale,
             occlusions: Vec::new(),
         })
@@ -468,7 +467,6 @@ fn open(path: PathBuf, dlo: Option<PathBuf>) -> PyResult<Sequence> {
 #[pyfunction]
 #[pyo3(signature = (path, out=None, params=None, algorithm=None, dlo=None))]
 fn track(
-    py: Python<'_>,
     path: PathBuf,
     out: Option<PathBuf>,
     params: Option<&Bound<'_, PyAny>>,
@@ -478,15 +476,11 @@ fn track(
     let params = algorithm_of(algorithm, params_of(params)?)?;
     let seq = upetrack_io::recorded::open_any(&path, dlo.as_deref(), &Default::default())
         .map_err(sequence_error)?;
-    let start = Instant::now();
-    let result = upetrack_io::run::track_sequence(&seq, params, &mut move || {
-        start.elapsed().as_secs_f64() * 1000.0
-    })
-    .map_err(sequence_error)?;
+    let result =
+        upetrack_io::run::track_sequence(&seq, params, &mut clock_ms()).map_err(sequence_error)?;
     if let Some(out) = out {
         upetrack_io::write::write_json(&out, &result).map_err(sequence_error)?;
     }
-    let _ = py;
     serde_json::to_string_pretty(&result).map_err(|e| SequenceError::new_err(e.to_string()))
 }
 

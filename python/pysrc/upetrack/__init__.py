@@ -6,30 +6,7 @@ command reads (sequence folders, .zip, .bag, .db3, .mcap) and `track` runs a
 whole sequence as `upetrack track` does. Everything is the Rust core's.
 """
 
-from ._upetrack import (
-    Frames,
-    Intrinsics,
-    Sequence,
-    SequenceError,
-    StepResult,
-    Tracker,
-    TrackerError,
-    __version__,
-    algorithms,
-    open,
-    track,
-)
+from . import _upetrack
+from ._upetrack import *  # noqa: F401,F403 (the extension's names, listed once in its __all__)
 
-__all__ = [
-    "Frames",
-    "Intrinsics",
-    "Sequence",
-    "SequenceError",
-    "StepResult",
-    "Tracker",
-    "TrackerError",
-    "__version__",
-    "algorithms",
-    "open",
-    "track",
-]
+__all__ = _upetrack.__all__

@@ -323,13 +323,26 @@ mod tests {
         }
     }
 
+    /// A grid of 1..=`max_side` cells a side whose cells are set with a
+    /// probability drawn from `density`; and its width and height.
+    fn random_grid(
+        rng: &mut crate::rng::SplitMix64,
+        max_side: u64,
+        density: core::ops::Range<f64>,
+    ) -> (Vec<bool>, usize, usize) {
+        let (w, h) = (
+            1 + rng.below(max_side) as usize,
+            1 + rng.below(max_side) as usize,
+        );
+        let p = density.start + (density.end - density.start) * rng.uniform();
+        ((0..w * h).map(|_| rng.uniform() < p).collect(), w, h)
+    }
+
     #[test]
     fn distance_transform_is_exact_against_brute_force() {
         let mut rng = crate::rng::SplitMix64::new(3);
         for _ in 0..200 {
-            let (w, h) = (1 + rng.below(16) as usize, 1 + rng.below(16) as usize);
-            let density = 0.5 + 0.45 * rng.uniform();
-            let mut cells: Vec<bool> = (0..w * h).map(|_| rng.uniform() < density).collect();
+            let (mut cells, w, h) = random_grid(&mut rng, 16, 0.5..0.95);
             cells[0] = false;
             assert_eq!(
                 distance_transform(&cells, w, h),
@@ -343,9 +356,7 @@ mod tests {
     fn holes_are_those_the_flood_from_the_border_leaves() {
         let mut rng = crate::rng::SplitMix64::new(5);
         for _ in 0..300 {
-            let (w, h) = (1 + rng.below(24) as usize, 1 + rng.below(24) as usize);
-            let density = 0.4 + 0.55 * rng.uniform();
-            let cells: Vec<bool> = (0..w * h).map(|_| rng.uniform() < density).collect();
+            let (cells, w, h) = random_grid(&mut rng, 24, 0.4..0.95);
             let (mut ours, mut theirs) = (cells.clone(), cells);
             fill_small_holes(&mut ours, w, h);
             flood_reference(&mut theirs, w, h);
