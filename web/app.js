@@ -195,7 +195,7 @@ async function start() {
   try {
     if (query.has('hsv')) {
       const h = parseHsvQuery(query.get('hsv'));
-      hsv = checkDlo(JSON.stringify({ segmentation: { hsv_lower: h.lower, hsv_upper: h.upper } })).hsv;
+      hsv = checkDlo(JSON.stringify({ segmentation: { hsv_lower: h.lower, hsv_upper: h.upper, chroma_noise: h.chroma_noise } })).hsv;
     }
     if (query.has('rects')) rects = parseRectsQuery(query.get('rects'));
   } catch (err) { problems.push(err.message); }

@@ -44,7 +44,7 @@ function steps(v) {
   const out = [
     {
       name: 'segmentation', title: 'Segmentation',
-      text: `${v.mask_pixels} pixels have a colour inside the HSV range (H ${state.hsv.lower[0]}-${state.hsv.upper[0]}, S ${state.hsv.lower[1]}-${state.hsv.upper[1]}, V ${state.hsv.lower[2]}-${state.hsv.upper[2]}, OpenCV's 8-bit HSV). Occlusion rectangles are blacked out first, so nothing under them is seen (Sec. III-A).`,
+      text: `${v.mask_pixels} pixels have a colour inside the HSV range (H ${state.hsv.lower[0]}-${state.hsv.upper[0]}, S ${state.hsv.lower[1]}-${state.hsv.upper[1]}, V ${state.hsv.lower[2]}-${state.hsv.upper[2]}, OpenCV's 8-bit HSV${state.hsv.chroma_noise ? `; saturation within ${state.hsv.chroma_noise} levels of colour noise` : ''}). Occlusion rectangles are blacked out first, so nothing under them is seen (Sec. III-A).`,
       draw: drawMask,
     },
     {

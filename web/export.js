@@ -18,7 +18,11 @@ export function dloJson() {
   return {
     depth_scale: info.depth_scale,
     fps: info.fps,
-    segmentation: { hsv_lower: state.hsv.lower, hsv_upper: state.hsv.upper },
+    segmentation: {
+      hsv_lower: state.hsv.lower,
+      hsv_upper: state.hsv.upper,
+      ...(state.hsv.chroma_noise ? { chroma_noise: state.hsv.chroma_noise } : {}),
+    },
     occlusions: [...info.occlusions, ...state.userRects.map((r) => ({ frames: [0, last], rect: r }))],
     ...(state.rope ? { rope: state.rope } : {}),
   };

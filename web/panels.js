@@ -13,12 +13,14 @@ import { shareLink } from './share.js';
 
 export function setHsvInputs(h) {
   ['h', 's', 'v'].forEach((c, k) => { $(`${c}-lo`).value = h.lower[k]; $(`${c}-hi`).value = h.upper[k]; });
+  $('chroma-noise').value = h.chroma_noise || 0;
 }
 
 // The typed range, checked as dlo.json's `segmentation` would be.
 function hsvFromInputs() {
   const [lower, upper] = ['lo', 'hi'].map((end) => ['h', 's', 'v'].map((c) => Number($(`${c}-${end}`).value)));
-  return checkDlo(JSON.stringify({ segmentation: { hsv_lower: lower, hsv_upper: upper } })).hsv;
+  const segmentation = { hsv_lower: lower, hsv_upper: upper, chroma_noise: Number($('chroma-noise').value) };
+  return checkDlo(JSON.stringify({ segmentation })).hsv;
 }
 
 export async function applyHsv(hsv) {

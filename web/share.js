@@ -14,7 +14,10 @@ export function shareLink() {
   if ($('speed').value !== '1') q.set('speed', $('speed').value);
   for (const [k, v] of paramsQuery(state.params)) q.set(k, v);
   const own = state.seq && state.seq.info.hsv;
-  if (state.hsv && own && JSON.stringify(state.hsv) !== JSON.stringify(own)) q.set('hsv', [...state.hsv.lower, ...state.hsv.upper].join(','));
+  if (state.hsv && own && JSON.stringify(state.hsv) !== JSON.stringify(own)) {
+    const noise = state.hsv.chroma_noise ? [state.hsv.chroma_noise] : [];
+    q.set('hsv', [...state.hsv.lower, ...state.hsv.upper, ...noise].join(','));
+  }
   if (state.userRects.length) q.set('rects', state.userRects.map((r) => r.join(',')).join(';'));
   if (state.explain) {
     q.set('explain', 'upe');
@@ -33,11 +36,12 @@ function wholeNumbers(text, count) {
   return v.length === count && v.every(Number.isInteger) ? v : null;
 }
 
-// `hsv=h,s,v,h,s,v` as { lower, upper }, or an error naming the value.
+// `hsv=h,s,v,h,s,v[,noise]` as { lower, upper, chroma_noise }, or an error
+// naming the value.
 export function parseHsvQuery(text) {
-  const v = wholeNumbers(text, 6);
-  if (!v) throw new Error(`hsv=${text}: give six whole numbers, lower h,s,v then upper h,s,v`);
-  return { lower: v.slice(0, 3), upper: v.slice(3) };
+  const v = wholeNumbers(text, 6) || wholeNumbers(text, 7);
+  if (!v) throw new Error(`hsv=${text}: give six whole numbers, lower h,s,v then upper h,s,v (and the colour noise, a seventh)`);
+  return { lower: v.slice(0, 3), upper: v.slice(3, 6), chroma_noise: v[6] || 0 };
 }
 
 // `rects=x,y,w,h;...` as rectangles, or an error naming the value.

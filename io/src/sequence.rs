@@ -66,6 +66,31 @@ pub struct SegmentationConfig {
     pub hsv_lower: [u8; 3],
     /// `[h, s, v]` upper bounds.
     pub hsv_upper: [u8; 3],
+    /// Colour noise allowed for when the saturation is tested, in 8-bit
+    /// levels of chroma (`max - min` of a pixel's R, G, B); absent: 0,
+    /// OpenCV's `inRange` exactly ([`HsvRange::chroma_noise`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub chroma_noise: Option<u8>,
+}
+
+impl SegmentationConfig {
+    /// The `dlo.json` form of a range (`chroma_noise` left out when 0).
+    pub fn of(range: &HsvRange) -> Self {
+        Self {
+            hsv_lower: range.lower,
+            hsv_upper: range.upper,
+            chroma_noise: (range.chroma_noise > 0).then_some(range.chroma_noise),
+        }
+    }
+
+    /// The range it describes.
+    pub fn range(&self) -> HsvRange {
+        HsvRange {
+            lower: self.hsv_lower,
+            upper: self.hsv_upper,
+            chroma_noise: self.chroma_noise.unwrap_or(0),
+        }
+    }
 }
 
 /// One occlusion entry of `dlo.json`: colour pixels of `rect` blacked out
@@ -151,10 +176,7 @@ impl DloConfig {
     pub fn check(&self, path: &str) -> Result<HsvRange, SequenceError> {
         let hsv = match &self.segmentation {
             Some(s) => {
-                let r = HsvRange {
-                    lower: s.hsv_lower,
-                    upper: s.hsv_upper,
-                };
+                let r = s.range();
                 r.validate()
                     .map_err(|e| SequenceError::invalid(path, format!("segmentation: {e}")))?;
                 r

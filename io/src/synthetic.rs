@@ -77,10 +77,7 @@ impl SyntheticWriter {
         let dlo = DloConfig {
             depth_scale: Some(SYNTHETIC_DEPTH_SCALE),
             fps: Some(SYNTHETIC_FPS),
-            segmentation: Some(SegmentationConfig {
-                hsv_lower: hsv.lower,
-                hsv_upper: hsv.upper,
-            }),
+            segmentation: Some(SegmentationConfig::of(&hsv)),
             occlusions: s
                 .occlusions
                 .iter()

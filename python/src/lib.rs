@@ -218,7 +218,9 @@ impl StepResult {
 /// hsv=((90, 90, 30), (130, 255, 255)), occlusions=())`: `params` a dict of
 /// any subset of the parameters or a preset name; `algorithm` one of
 /// "upetrack", "cpd", "trackdlo", "cdcpd2"; `depth_scale` metres per depth
-/// unit; `hsv` the rope's colour range in OpenCV's convention; `occlusions`
+/// unit; `hsv` the rope's colour range in OpenCV's convention and
+/// `chroma_noise` the colour noise its saturation test allows for (levels of
+/// chroma, 0 is OpenCV's `inRange`; docs/sequence-format.md); `occlusions`
 /// rectangles `(x, y, w, h)` blacked out on every frame.
 #[pyclass(module = "upetrack")]
 struct Tracker {
@@ -230,7 +232,7 @@ struct Tracker {
 #[pymethods]
 impl Tracker {
     #[new]
-    #[pyo3(signature = (intrinsics, params=None, algorithm=None, depth_scale=0.001, hsv=None, occlusions=Vec::new()))]
+    #[pyo3(signature = (intrinsics, params=None, algorithm=None, depth_scale=0.001, hsv=None, occlusions=Vec::new(), chroma_noise=0))]
     fn new(
         intrinsics: &Intrinsics,
         params: Option<&Bound<'_, PyAny>>,
@@ -238,6 +240,7 @@ impl Tracker {
         depth_scale: f64,
         hsv: Option<HsvTuple>,
         occlusions: Vec<(i64, i64, i64, i64)>,
+        chroma_noise: u8,
     ) -> PyResult<Self> {
         let params = algorithm_of(algorithm, params_of(params)?)?;
         if !(depth_scale > 0.0 && depth_scale.is_finite()) {
@@ -248,6 +251,7 @@ impl Tracker {
         let hsv = hsv.map_or_else(HsvRange::default, |((a, b, c), (d, e, f))| HsvRange {
             lower: [a, b, c],
             upper: [d, e, f],
+            chroma_noise,
         });
         let inner =
             upetrack::Tracker::new(params, intrinsics.camera(), hsv).map_err(tracker_error)?;
@@ -390,6 +394,13 @@ impl Sequence {
     fn hsv(&self) -> HsvTuple {
         let ([a, b, c], [d, e, f]) = (self.inner.hsv.lower, self.inner.hsv.upper);
         ((a, b, c), (d, e, f))
+    }
+
+    /// The colour noise the range's saturation test allows for, levels of
+    /// chroma (0: OpenCV's `inRange`).
+    #[getter]
+    fn chroma_noise(&self) -> u8 {
+        self.inner.hsv.chroma_noise
     }
 
     /// The occluder rectangles `(x, y, w, h)` in force on frame `index`.

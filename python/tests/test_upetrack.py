@@ -173,3 +173,22 @@ def test_the_realsense_example_runs_on_genuine_recordings(recording, capsys):
     pairs = len(upetrack.open(str(RECORDINGS / recording)))
     assert 1 <= tracked <= pairs and len(lines) == tracked
     assert all("visible nodes" in line for line in lines), lines
+
+
+def test_a_grey_ropes_range_carries_its_chroma_noise(tmp_path):
+    """A drawn grey rope (seed 1025) is picked with colour noise allowed
+    for (dlo.json's chroma_noise); the sequence's tracker and one built from
+    its range give the same nodes, and the noise changes what is found."""
+    subprocess.run([command(), "-q", "synth", "random", str(tmp_path / "grey"), "--seed", "1025",
+                    "--frames", "4"], check=True)
+    folder = next(p.parent for p in (tmp_path / "grey").rglob("dlo.json"))
+    seq = upetrack.open(folder)
+    assert seq.chroma_noise == 20
+    by_hand = upetrack.Tracker(seq.intrinsics, hsv=seq.hsv, chroma_noise=seq.chroma_noise,
+                               depth_scale=seq.depth_scale)
+    without = upetrack.Tracker(seq.intrinsics, hsv=seq.hsv, depth_scale=seq.depth_scale)
+    own = seq.tracker()
+    color, depth = seq[0]
+    mine, theirs, plain = (t.step(color, depth, occlusions=seq.occlusions_at(0)) for t in (by_hand, own, without))
+    assert mine.nodes.tolist() == theirs.nodes.tolist()
+    assert plain.lost or plain.nodes.tolist() != mine.nodes.tolist()

@@ -567,6 +567,7 @@ pub fn rope_hsv(color: [f64; 3]) -> HsvRange {
     HsvRange {
         lower: [lo, (s as f64 * 0.6) as u8, 20],
         upper: [hi, 255, 255],
+        chroma_noise: 0,
     }
 }
 

@@ -454,12 +454,20 @@ await test('explain mode: a deep link opens at its step; steps change the drawin
 await test('a shared link carries the colour range and drawn occlusions', async () => {
   const page = await newPage('?autoplay=0&hsv=100,120,20,130,255,255&rects=10,10,50,40;100,100,20,20');
   const r = await page.evaluate(() => ({ hsv: window.upetrack.state.hsv, rects: window.upetrack.state.userRects, h: document.getElementById('h-lo').value }));
-  assert(JSON.stringify(r.hsv) === JSON.stringify({ lower: [100, 120, 20], upper: [130, 255, 255] }) && r.h === '100', `hsv: ${JSON.stringify(r)}`);
+  assert(JSON.stringify(r.hsv) === JSON.stringify({ lower: [100, 120, 20], upper: [130, 255, 255], chroma_noise: 0 }) && r.h === '100', `hsv: ${JSON.stringify(r)}`);
   assert(JSON.stringify(r.rects) === '[[10,10,50,40],[100,100,20,20]]', `rects: ${JSON.stringify(r.rects)}`);
   await page.click('#share-link');
   const link = await page.evaluate(() => document.getElementById('share-url').value);
   assert(link.includes('hsv=100%2C120%2C20%2C130%2C255%2C255') && link.includes('rects=10%2C10%2C50%2C40%3B100%2C100%2C20%2C20'), link);
   await page.close();
+  // A grey rope's range: its colour noise, the seventh number, goes in and comes back out.
+  const grey = await newPage('?autoplay=0&hsv=0,0,60,179,9,255,20');
+  const g = await grey.evaluate(() => ({ hsv: window.upetrack.state.hsv, noise: document.getElementById('chroma-noise').value }));
+  assert(g.hsv.chroma_noise === 20 && g.noise === '20', `grey hsv: ${JSON.stringify(g)}`);
+  await grey.click('#share-link');
+  const greyLink = await grey.evaluate(() => document.getElementById('share-url').value);
+  assert(greyLink.includes('hsv=0%2C0%2C60%2C179%2C9%2C255%2C20'), greyLink);
+  await grey.close();
   const bad = await newPage('?autoplay=0&hsv=1,2,3&rects=1,2,3', { errors: true });
   const m = await messageOf(bad);
   assert(m.includes('hsv=1,2,3: give six whole numbers'), m);

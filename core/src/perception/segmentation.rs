@@ -28,11 +28,27 @@ pub const PICK_MIN_VALUE: u8 = 20;
 pub const PICK_DARK_VALUE: u8 = 64;
 /// How far above the clicked value a black range reaches (highlights).
 pub const PICK_DARK_VALUE_ABOVE: u8 = 48;
-/// A clicked pixel less saturated than this is grey or white: any hue,
-/// saturation up to a margin above the pixel's.
+/// A clicked pixel less saturated than this is grey or white: any hue and
+/// saturation, chroma up to a margin above the pixel's.
 pub const PICK_GREY_SATURATION: u8 = 40;
-/// How far above the clicked saturation a grey range reaches.
-pub const PICK_GREY_SATURATION_ABOVE: u8 = 40;
+/// The colour noise a grey range allows for ([`HsvRange::chroma_noise`]),
+/// 8-bit levels of chroma: the camera's noise on each channel and the
+/// JPEG's subsampled chroma on a grey surface, whatever its brightness.
+/// Its saturation bound is then the clicked pixel's own: a bright table a
+/// little more saturated than the rope stays out, and the rope's shaded
+/// side, where the same noise is a large saturation, comes in.
+pub const PICK_GREY_CHROMA_NOISE: u8 = 20;
+/// The share of the clicked value a grey or white rope's shaded side keeps,
+/// in 1/256: light falls on a round rope's flank at a grazing angle, so
+/// the flank is a fraction of the lit top's brightness, not a fixed number
+/// of levels below it.
+pub const PICK_SHADED_SHARE_256: u16 = 128;
+
+/// The lowest value a grey or white range takes for a click of value `v`:
+/// [`PICK_SHADED_SHARE_256`] of it.
+fn shaded_value(v: u8) -> u8 {
+    ((u16::from(v) * PICK_SHADED_SHARE_256 + 128) >> 8) as u8
+}
 
 /// Errors in segmentation settings.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -64,6 +80,16 @@ pub struct HsvRange {
     pub lower: [u8; 3],
     /// `[h, s, v]` upper bounds.
     pub upper: [u8; 3],
+    /// The camera's colour noise allowed for when the saturation is
+    /// tested, in 8-bit levels of chroma (`max(R, G, B) - min(R, G, B)`): a
+    /// pixel passes the saturation bounds when a chroma within this many
+    /// levels of its own would. 0 (the default) is OpenCV's `inRange`
+    /// exactly. Saturation is `255 chroma / max`: on the dark, shaded side
+    /// of a grey rope a few levels of noise are a large saturation, on its
+    /// lit side and on a bright table they are not. `dlo.json`:
+    /// `segmentation.chroma_noise`, absent when 0.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub chroma_noise: u8,
 }
 
 impl Default for HsvRange {
@@ -72,6 +98,7 @@ impl Default for HsvRange {
         Self {
             lower: [90, 90, 30],
             upper: [130, 255, 255],
+            chroma_noise: 0,
         }
     }
 }
@@ -108,20 +135,22 @@ impl HsvRange {
     /// saturation and value from a margin below the pixel's up to 255,
     /// never down to grey or black. A black pixel: any hue and saturation,
     /// value up to [`PICK_DARK_VALUE_ABOVE`] above its own. A grey or white
-    /// one: any hue, saturation up to [`PICK_GREY_SATURATION_ABOVE`] above
-    /// its own, value from [`PICK_VALUE_BELOW`] below its own.
+    /// one: any hue and saturation, chroma up to [`PICK_GREY_CHROMA_ABOVE`]
+    /// above its own, value from [`PICK_VALUE_BELOW`] below its own.
     pub fn around(rgb: [u8; 3]) -> Self {
         let [h, s, v] = rgb_to_hsv(rgb);
         if v < PICK_DARK_VALUE {
             return Self {
                 lower: [0, 0, 0],
                 upper: [HUE_MAX, 255, v.saturating_add(PICK_DARK_VALUE_ABOVE)],
+                chroma_noise: 0,
             };
         }
         if s < PICK_GREY_SATURATION {
             return Self {
-                lower: [0, 0, v.saturating_sub(PICK_VALUE_BELOW)],
-                upper: [HUE_MAX, s.saturating_add(PICK_GREY_SATURATION_ABOVE), 255],
+                lower: [0, 0, shaded_value(v)],
+                upper: [HUE_MAX, s, 255],
+                chroma_noise: PICK_GREY_CHROMA_NOISE,
             };
         }
         let hues = u16::from(HUE_MAX) + 1;
@@ -135,6 +164,7 @@ impl HsvRange {
                 v.saturating_sub(PICK_VALUE_BELOW).max(PICK_MIN_VALUE),
             ],
             upper: [upper_h as u8, 255, 255],
+            chroma_noise: 0,
         }
     }
 
@@ -152,6 +182,24 @@ impl HsvRange {
             && s <= self.upper[1]
             && v >= self.lower[2]
             && v <= self.upper[2]
+    }
+
+    /// `true` when an RGB pixel passes: its HSV in the box
+    /// ([`HsvRange::contains`]), its saturation allowed
+    /// [`HsvRange::chroma_noise`] levels of chroma either way. [`segment`]
+    /// takes exactly these pixels.
+    pub fn contains_rgb(&self, rgb: [u8; 3]) -> bool {
+        let [h, _, v] = rgb_to_hsv(rgb);
+        let (hi, lo) = (
+            rgb[0].max(rgb[1]).max(rgb[2]),
+            rgb[0].min(rgb[1]).min(rgb[2]),
+        );
+        let (v, diff) = (i32::from(v), i32::from(hi - lo));
+        let noise = i32::from(self.chroma_noise);
+        ((diff - noise).max(0)..=(diff + noise).min(v)).any(|d| {
+            let s = saturation(v, d) as u8;
+            self.contains([h, s, v as u8])
+        })
     }
 }
 
@@ -315,7 +363,8 @@ const PIXEL_STARTS: [u8; 3 * SEGMENT_BLOCK] = {
 /// whose saturation falls in `range` form one interval (saturation grows
 /// with `diff` at a fixed `v`): `(first, count)`, `count = 0` where `v` is
 /// outside the value range. A pixel then passes both tests when
-/// `diff - first < count` as unsigned numbers.
+/// `diff - first < count` as unsigned numbers. The interval is widened by
+/// [`HsvRange::chroma_noise`] on each side.
 fn chroma_intervals(range: &HsvRange) -> [(i32, u32); 256] {
     let (v_lo, v_hi) = (range.lower[2] as i32, range.upper[2] as i32);
     let (s_lo, s_hi) = (range.lower[1] as i32, range.upper[1] as i32);
@@ -342,6 +391,8 @@ fn chroma_intervals(range: &HsvRange) -> [(i32, u32); 256] {
         let first = first_reaching(s_lo);
         let end = first_reaching(s_hi + 1);
         if end > first {
+            let noise = i32::from(range.chroma_noise);
+            let (first, end) = ((first - noise).max(0), (end + noise).min(v + 1));
             *slot = (first, (end - first) as u32);
         }
     }
@@ -391,18 +442,26 @@ fn in_hue_sectors(sectors: &[u8; 6], r: u8, g: u8, b: u8) -> u8 {
 
 /// The second pre-test of [`segment`] on a block's channel lanes: `false`
 /// only when no pixel's saturation can reach `s_lo` or (with `UPPER`,
-/// for a range that stops below 255) stay below `s_hi_next`.
+/// for a range that stops below 255) stay below `s_hi_next`, with its
+/// chroma moved by up to `noise` levels ([`HsvRange::chroma_noise`]) the
+/// way that helps it.
 #[inline(always)]
 fn may_be_saturated<const UPPER: bool>(
     [r, g, b]: [&[u8; 3 * SEGMENT_BLOCK]; 3],
     s_lo: u16,
     s_hi_next: u16,
+    noise: u8,
 ) -> bool {
     let mut saturated = 0u8;
     for i in 0..3 * SEGMENT_BLOCK {
         let (hi, lo) = (r[i].max(g[i]).max(b[i]), r[i].min(g[i]).min(b[i]));
-        let (v, diff) = (u16::from(hi), u16::from(hi - lo));
-        let within = 255 * diff + v >= s_lo * v && (!UPPER || 255 * diff <= s_hi_next * v);
+        let diff = hi - lo;
+        let (more, less) = (
+            diff.saturating_add(noise).min(hi),
+            diff.saturating_sub(noise),
+        );
+        let (v, more, less) = (u16::from(hi), u16::from(more), u16::from(less));
+        let within = 255 * more + v >= s_lo * v && (!UPPER || 255 * less <= s_hi_next * v);
         saturated |= PIXEL_STARTS[i] & u8::from(within);
     }
     saturated != 0
@@ -432,6 +491,7 @@ pub fn segment(frame: &Frame<'_>, range: &HsvRange, occlusions: &[Rect]) -> Mask
     // hue range meets (`hue_sectors`): a table as saturated as the rope is
     // told from it by hue alone. All keep every pixel the exact test may take.
     let (v_lo, v_hi) = (range.lower[2], range.upper[2]);
+    let noise = range.chroma_noise;
     let s_lo = u16::from(range.lower[1]);
     let s_hi_next = u16::from(range.upper[1]) + 1;
     let least_diff = chroma
@@ -467,9 +527,9 @@ pub fn segment(frame: &Frame<'_>, range: &HsvRange, occlusions: &[Rect]) -> Mask
                 continue;
             }
             let saturated = if s_hi_next <= 255 {
-                may_be_saturated::<true>([r, g, b], s_lo, s_hi_next)
+                may_be_saturated::<true>([r, g, b], s_lo, s_hi_next, noise)
             } else {
-                may_be_saturated::<false>([r, g, b], s_lo, s_hi_next)
+                may_be_saturated::<false>([r, g, b], s_lo, s_hi_next, noise)
             };
             if !saturated {
                 continue;
@@ -687,18 +747,31 @@ mod tests {
             HsvRange {
                 lower: [170, 50, 40],
                 upper: [8, 230, 250],
+                chroma_noise: 0,
             },
             HsvRange {
                 lower: [0, 0, 0],
                 upper: [179, 255, 255],
+                chroma_noise: 0,
+            },
+            // A grey rope's range: its own saturation, 20 levels of noise.
+            HsvRange {
+                lower: [0, 0, 40],
+                upper: [179, 12, 255],
+                chroma_noise: 20,
+            },
+            HsvRange {
+                lower: [0, 20, 40],
+                upper: [179, 120, 200],
+                chroma_noise: 7,
             },
         ] {
             let m = segment(&f, &range, &[]);
             for (i, px) in color.chunks_exact(3).enumerate() {
                 assert_eq!(
                     m.data[i],
-                    range.contains(rgb_to_hsv([px[0], px[1], px[2]])),
-                    "{px:?}"
+                    range.contains_rgb([px[0], px[1], px[2]]),
+                    "{px:?} {range:?}"
                 );
             }
         }
@@ -717,6 +790,7 @@ mod tests {
                 let range = HsvRange {
                     lower: [lo, 0, 0],
                     upper: [hi, 255, 255],
+                    chroma_noise: 0,
                 };
                 let sectors = hue_sectors(&range);
                 let mut rejected = 0usize;
@@ -743,16 +817,19 @@ mod tests {
         let green = HsvRange {
             lower: [35, 0, 0],
             upper: [85, 255, 255],
+            chroma_noise: 0,
         };
         assert_eq!(hue_sectors(&green), [0, 1, 1, 0, 0, 0]);
         let red = HsvRange {
             lower: [170, 0, 0],
             upper: [8, 255, 255],
+            chroma_noise: 0,
         };
         assert_eq!(hue_sectors(&red), [1, 0, 0, 0, 0, 1]);
         let everything = HsvRange {
             lower: [5, 0, 0],
             upper: [3, 255, 255],
+            chroma_noise: 0,
         };
         assert_eq!(hue_sectors(&everything), [1; 6]);
     }
@@ -791,7 +868,11 @@ mod tests {
                     // Hue may wrap (lower > upper); S and V are ordered.
                     (lower[c], upper[c]) = if c == 0 { (a, b) } else { (a.min(b), a.max(b)) };
                 }
-                let range = HsvRange { lower, upper };
+                let range = HsvRange {
+                    lower,
+                    upper,
+                    chroma_noise: 0,
+                };
                 let m = segment(&f, &range, &[]);
                 for (i, px) in color.chunks_exact(3).enumerate() {
                     let want = range.contains(rgb_to_hsv([px[0], px[1], px[2]]));
@@ -830,6 +911,7 @@ mod tests {
             let range = HsvRange {
                 lower: [0, s_lo as u8, 0],
                 upper: [179, 255, 255],
+                chroma_noise: 0,
             };
             assert_eq!(segment(&f, &range, &[]).data, want, "s_lo {s_lo}");
         }
@@ -866,6 +948,7 @@ mod tests {
             let range = HsvRange {
                 lower: [0, 0, 0],
                 upper: [179, s_hi as u8, 255],
+                chroma_noise: 0,
             };
             assert_eq!(segment(&f, &range, &[]).data, want, "s_hi {s_hi}");
         }
@@ -880,6 +963,7 @@ mod tests {
                 let range = HsvRange {
                     lower: [0, s_lo as u8, 30],
                     upper: [179, s_hi as u8, 240],
+                    chroma_noise: 0,
                 };
                 let table = chroma_intervals(&range);
                 for v in 0..256i32 {
@@ -938,9 +1022,15 @@ mod tests {
             assert!(!black.contains(rgb_to_hsv(px)), "{px:?} {black:?}");
         }
         let grey = HsvRange::around([150, 150, 146]);
-        assert!(grey.contains(rgb_to_hsv([120, 118, 122])));
-        assert!(!grey.contains(rgb_to_hsv([200, 60, 40])));
-        assert!(!grey.contains(rgb_to_hsv([20, 20, 20])));
+        assert!(grey.contains_rgb([120, 118, 122]));
+        assert!(!grey.contains_rgb([200, 60, 40]));
+        assert!(!grey.contains_rgb([20, 20, 20]));
+        // The rope's shaded side: a few levels of noise there are a large
+        // saturation (64, where the click has 7), not a large chroma (18).
+        assert_eq!(rgb_to_hsv([66, 54, 72])[1], 64);
+        assert!(grey.contains_rgb([66, 54, 72]));
+        // A shaded wooden table is as dark, and far from grey.
+        assert!(!grey.contains_rgb([110, 80, 55]));
     }
 
     /// A 5 px line crossing another at right angles, and touching a 40 x
@@ -1031,6 +1121,7 @@ mod tests {
         let r = HsvRange {
             lower: [100, 50, 60],
             upper: [120, 200, 210],
+            chroma_noise: 0,
         };
         assert!(r.contains([110, 100, 100]));
         for hsv in [
@@ -1046,20 +1137,23 @@ mod tests {
         // Equal bounds are a valid (one-value) range.
         assert!(HsvRange {
             lower: [0, 100, 50],
-            upper: [179, 100, 50]
+            upper: [179, 100, 50],
+            chroma_noise: 0
         }
         .validate()
         .is_ok());
         // Hue 179 is the last valid one.
         assert!(HsvRange {
             lower: [0, 0, 0],
-            upper: [179, 255, 255]
+            upper: [179, 255, 255],
+            chroma_noise: 0
         }
         .validate()
         .is_ok());
         assert!(HsvRange {
             lower: [180, 0, 0],
-            upper: [179, 255, 255]
+            upper: [179, 255, 255],
+            chroma_noise: 0
         }
         .validate()
         .is_err());
@@ -1070,6 +1164,7 @@ mod tests {
         let red = HsvRange {
             lower: [170, 100, 50],
             upper: [10, 255, 255],
+            chroma_noise: 0,
         };
         assert!(red.validate().is_ok());
         assert!(red.contains([175, 200, 200]));
@@ -1082,6 +1177,7 @@ mod tests {
         let r = HsvRange {
             lower: [0, 200, 0],
             upper: [179, 100, 255],
+            chroma_noise: 0,
         };
         assert!(matches!(
             r.validate(),
@@ -1093,6 +1189,7 @@ mod tests {
         let r = HsvRange {
             lower: [0, 0, 0],
             upper: [200, 255, 255],
+            chroma_noise: 0,
         };
         assert!(matches!(
             r.validate(),

@@ -74,6 +74,7 @@ class Tracker:
         depth_scale: float = 0.001,
         hsv: Optional[_Hsv] = None,
         occlusions: Seq[_Rect] = ...,
+        chroma_noise: int = 0,
     ) -> "Tracker": ...
     def step(
         self,
@@ -100,6 +101,7 @@ class Sequence:
     depth_scale: float
     fps: float
     hsv: _Hsv
+    chroma_noise: int
     def __len__(self) -> int: ...
     def __getitem__(self, index: int, /) -> _Arrays: ...
     def time(self, index: int) -> float:
