@@ -135,8 +135,10 @@ impl HsvRange {
     /// saturation and value from a margin below the pixel's up to 255,
     /// never down to grey or black. A black pixel: any hue and saturation,
     /// value up to [`PICK_DARK_VALUE_ABOVE`] above its own. A grey or white
-    /// one: any hue and saturation, chroma up to [`PICK_GREY_CHROMA_ABOVE`]
-    /// above its own, value from [`PICK_VALUE_BELOW`] below its own.
+    /// one: any hue, saturation up to its own with
+    /// [`PICK_GREY_CHROMA_NOISE`] levels of colour noise allowed for
+    /// ([`HsvRange::chroma_noise`]), value from [`PICK_SHADED_SHARE_256`]
+    /// of its own.
     pub fn around(rgb: [u8; 3]) -> Self {
         let [h, s, v] = rgb_to_hsv(rgb);
         if v < PICK_DARK_VALUE {
