@@ -1028,9 +1028,11 @@ mod tests {
         assert!(!grey.contains_rgb([200, 60, 40]));
         assert!(!grey.contains_rgb([20, 20, 20]));
         // The rope's shaded side: a few levels of noise there are a large
-        // saturation (64, where the click has 7), not a large chroma (18).
-        assert_eq!(rgb_to_hsv([66, 54, 72])[1], 64);
-        assert!(grey.contains_rgb([66, 54, 72]));
+        // saturation (53, where the click has 7), not a large chroma (18).
+        assert_eq!(rgb_to_hsv([80, 68, 86])[1], 53);
+        assert!(grey.contains_rgb([80, 68, 86]));
+        // Half the clicked value is the shaded side's floor.
+        assert!(grey.contains_rgb([75, 75, 75]) && !grey.contains_rgb([74, 74, 74]));
         // A shaded wooden table is as dark, and far from grey.
         assert!(!grey.contains_rgb([110, 80, 55]));
     }
