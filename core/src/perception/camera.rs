@@ -11,6 +11,19 @@ pub const MAX_IMAGE_SIDE: u32 = 8192;
 pub const DEFAULT_DEPTH_SCALE: f64 = 0.001;
 /// Frames per second when nothing says otherwise (a D435i's default rate).
 pub const DEFAULT_FPS: f64 = 30.0;
+/// Depth noise of the D435i's stereo matching, as a disparity error in pixels.
+pub const SUBPIXEL_DISPARITY: f64 = 0.08;
+/// The D435i's stereo baseline, metres.
+pub const STEREO_BASELINE: f64 = 0.050;
+
+/// One deviation of the D435i's depth at `z` metres for a focal length of
+/// `f` pixels: `z^2 e / (f b)` for a disparity error `e`
+/// ([`SUBPIXEL_DISPARITY`]) and baseline `b` ([`STEREO_BASELINE`]). It grows
+/// with the square of the distance: 0.9 mm at 0.6 m, 2.6 mm at 1 m and
+/// 10 mm at 2 m for a 615 px focal length.
+pub fn depth_noise(z: f64, f: f64) -> f64 {
+    z * z * SUBPIXEL_DISPARITY / (f * STEREO_BASELINE)
+}
 
 /// Errors in camera intrinsics.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

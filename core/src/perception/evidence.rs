@@ -5,7 +5,7 @@
 //! measurement, or on rope-coloured pixels; a node whose pixels show a
 //! surface at or behind it with no rope colour is in free space.
 
-use super::camera::CameraIntrinsics;
+use super::camera::{depth_noise, CameraIntrinsics};
 use super::frame::Frame;
 use super::segmentation::{Mask, Rect};
 use crate::math::Vec3;
@@ -14,6 +14,12 @@ use crate::math::Vec3;
 /// well above the depth noise at a metre (about 3 mm) and below the gap
 /// between a rope and a hand or box held just above it.
 pub const OCCLUDER_MARGIN: f64 = 0.01;
+
+/// How unlikely it must be that depth noise alone made the pixels of an
+/// open table behind a point look nearer than it, as a one-sided normal
+/// quantile (3.09: one chance in a thousand), before [`Evidence::sight`]
+/// takes them for an occluder.
+pub const OCCLUDER_FALSE_ALARM_SIGMAS: f64 = 3.09;
 
 /// Half-width of the window of pixels looked at around a point's
 /// projection, as a multiple of the rope's radius in pixels (the window
@@ -117,7 +123,7 @@ impl Evidence<'_> {
         let focal = 0.5 * (self.camera.fx + self.camera.fy);
         let half = (libm::ceil(WINDOW_RADII * self.radius * focal / p.z) as i64)
             .clamp(MIN_WINDOW_PX, MAX_WINDOW_PX);
-        let mut any_depth = false;
+        let (mut measured, mut nearer) = (0usize, 0usize);
         for y in (v - half).max(0)..=(v + half).min(h - 1) {
             for x in (u - half).max(0)..=(u + half).min(w - 1) {
                 if self.mask.get(x, y) {
@@ -127,17 +133,38 @@ impl Evidence<'_> {
                 if raw == 0 {
                     continue;
                 }
-                any_depth = true;
+                measured += 1;
                 if (raw as f64) * self.frame.depth_scale < p.z - OCCLUDER_MARGIN {
-                    return Sight::Occluded;
+                    nearer += 1;
                 }
             }
         }
-        if any_depth {
-            Sight::FreeSpace
-        } else {
+        if measured == 0 {
             Sight::Unknown
+        } else if nearer >= self.occluder_pixels(p.z, measured) {
+            Sight::Occluded
+        } else {
+            Sight::FreeSpace
         }
+    }
+
+    /// The fewest of `measured` pixels around a point `z` metres away that
+    /// must be nearer than it by [`OCCLUDER_MARGIN`] to say something hides
+    /// it: one more than depth noise alone would give, with the chance
+    /// [`OCCLUDER_FALSE_ALARM_SIGMAS`] allows, if the pixels showed the
+    /// open table a rope's radius behind the point (each one that near with
+    /// chance `q`, one deviation of the count above its mean). Near the
+    /// camera `q` is negligible and one pixel is enough (0.9 m, a 5 mm
+    /// rope: `q` below 1e-6); at 1.9 m one deviation of depth is 9 mm, as
+    /// much as the margin, and a window of 81 pixels needs 9.
+    pub fn occluder_pixels(&self, z: f64, measured: usize) -> usize {
+        let focal = 0.5 * (self.camera.fx + self.camera.fy);
+        let sigma = depth_noise(z, focal);
+        let q =
+            0.5 * libm::erfc((OCCLUDER_MARGIN + self.radius) / (sigma * core::f64::consts::SQRT_2));
+        let n = measured as f64;
+        let spread = libm::sqrt(n * q * (1.0 - q));
+        1 + libm::floor(n * q + OCCLUDER_FALSE_ALARM_SIGMAS * spread) as usize
     }
 }
 
@@ -229,6 +256,54 @@ mod tests {
             h: 10,
         };
         (t, [rect])
+    }
+
+    /// Open table 1.9 m away, a 13.6 mm rope's axis a radius in front of
+    /// it (drawn tuning seed 1025): one deviation of depth there is 9.4 mm,
+    /// so a few of the window's 81 pixels are always a centimetre nearer
+    /// by noise alone, and taking any one of them for an occluder let a
+    /// hidden end run out of its rectangle onto the open table (2.1 ->
+    /// 17.3 mm). Noise alone is free space; a box over a third of the
+    /// window is an occluder, as is one pixel near the camera.
+    #[test]
+    fn depth_noise_on_open_table_far_away_is_not_an_occluder() {
+        let (focal, radius, table_mm) = (615.0, 0.0068, 1900u16);
+        let mut t = Table::new(80, 80, focal, table_mm);
+        let sigma_mm = 1000.0 * depth_noise(1.9, focal);
+        assert!((sigma_mm - 9.4).abs() < 0.1, "{sigma_mm}");
+        let mut rng = crate::rng::SplitMix64::new(1025);
+        for d in t.depth.iter_mut() {
+            *d = libm::round(f64::from(table_mm) + sigma_mm * rng.normal()) as u16;
+        }
+        let p = t.at(40.0, 40.0, 1.9 - radius);
+        let nearer = |t: &Table| {
+            let (u0, u1) = (36, 44);
+            (u0..=u1)
+                .flat_map(|y| (u0..=u1).map(move |x| (x, y)))
+                .filter(|&(x, y)| f64::from(t.depth[y * 80 + x]) * 0.001 < p.z - OCCLUDER_MARGIN)
+                .count()
+        };
+        // The old rule's one pixel is there; the count is not above noise.
+        assert!(nearer(&t) >= 1, "the noise draw shows no near pixel");
+        let sight = |t: &Table| {
+            let f = t.frame();
+            t.evidence(&f, &[], radius).sight(&p)
+        };
+        assert_eq!(sight(&t), Sight::FreeSpace);
+        // A box 5 cm above the table over the window's three left columns.
+        let mut boxed = Table::new(80, 80, focal, table_mm);
+        boxed.depth.clone_from(&t.depth);
+        for y in 36..=44 {
+            for x in 36..=38 {
+                boxed.depth[y * 80 + x] = table_mm - 50;
+            }
+        }
+        assert_eq!(sight(&boxed), Sight::Occluded);
+        // Near the camera a single pixel still counts.
+        let f = t.frame();
+        let e = t.evidence(&f, &[], 0.005);
+        assert_eq!(e.occluder_pixels(0.9, 81), 1);
+        assert!(e.occluder_pixels(1.9, 81) > 5);
     }
 
     #[test]
@@ -336,13 +411,18 @@ mod tests {
         assert_eq!(e.sight(&at(20.0, 39.6)), Sight::OutOfView);
         // Below the table (behind it): the table is nearer, so it hides the point.
         assert_eq!(e.sight(&Vec3::new(0.0, 0.0, 0.62)), Sight::Occluded);
-        // A surface 5 mm nearer is noise, 15 mm nearer an occluder.
+        // A surface 5 mm nearer is noise, 15 mm nearer over three rows of
+        // the window an occluder. (This toy camera's 40 px focal length
+        // makes one deviation of depth 14 mm at 0.6 m: one row of the 5 x 5
+        // window, 5 pixels, is what noise alone could give.)
         let mut near = Table::new(40, 40, 40.0, 600);
         near.depth.clone_from(&t.depth);
         near.mask = t.mask.clone();
         for x in 15..25 {
             near.depth[20 * 40 + x] = 585;
-            near.depth[25 * 40 + x] = 575;
+            for y in 24..=26 {
+                near.depth[y * 40 + x] = 575;
+            }
         }
         let frame2 = near.frame();
         let e2 = near.evidence(&frame2, &rect, 0.0075);

@@ -11,7 +11,7 @@ use super::lift::{depths_along, line_through, resolve_crossings, NO_ZONE};
 use super::report::{NotRope, SetAside};
 use super::skeleton::{Grid, Shape};
 use crate::math::{Vec2, Vec3};
-use crate::perception::camera::CameraIntrinsics;
+use crate::perception::camera::{depth_noise, CameraIntrinsics};
 use crate::perception::frame::Frame;
 use crate::perception::point_cloud::CloudSettings;
 use crate::perception::segmentation::Mask;
@@ -60,10 +60,6 @@ const MIN_PIECE_POINTS: usize = 4;
 const MAX_END_EXTENSION: usize = 60;
 /// Pixels back from a skeleton end used for the direction of its extension.
 const END_DIRECTION_PIXELS: usize = 8;
-/// Depth noise of the D435i's stereo matching, as a disparity error in pixels.
-const SUBPIXEL_DISPARITY: f64 = 0.08;
-/// The D435i's stereo baseline, metres.
-const STEREO_BASELINE: f64 = 0.050;
 /// A change of depth between neighbouring points of a path larger than
 /// this many depth-noise deviations (plus [`DEPTH_JUMP_SLOPE`] times their
 /// distance across the view) is two things touching in the image.
@@ -254,12 +250,6 @@ fn extend_end(walk: &mut super::graph::Walk, head: bool, labels: &[u32], width: 
         walk.widths.extend(vec![f64::NAN; k]);
         walk.zones.extend(vec![NO_ZONE; k]);
     }
-}
-
-/// One deviation of the D435i's depth at `z` metres for a focal length of
-/// `f` pixels: `z^2 e / (f b)` for a disparity error `e` and baseline `b`.
-pub(super) fn depth_noise(z: f64, f: f64) -> f64 {
-    z * z * SUBPIXEL_DISPARITY / (f * STEREO_BASELINE)
 }
 
 fn median(values: &mut [f64]) -> f64 {
