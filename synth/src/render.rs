@@ -556,7 +556,7 @@ pub fn render(
 /// value above 20; for a black, grey or white rope, the range clicking it
 /// picks ([`HsvRange::around`]).
 pub fn rope_hsv(color: [f64; 3]) -> HsvRange {
-    let rgb = color.map(|x| libm::round(x * 255.0).clamp(0.0, 255.0) as u8);
+    let rgb = albedo_rgb8(color);
     let [h, s, v] = rgb_to_hsv(rgb);
     if HsvRange::is_achromatic([h, s, v]) {
         // Black, grey or white: the range a user picks by clicking it.
@@ -564,11 +564,13 @@ pub fn rope_hsv(color: [f64; 3]) -> HsvRange {
     }
     let lo = (h as i32 - 15).rem_euclid(180) as u8;
     let hi = (h as i32 + 15).rem_euclid(180) as u8;
-    HsvRange {
-        lower: [lo, (s as f64 * 0.6) as u8, 20],
-        upper: [hi, 255, 255],
-        chroma_noise: 0,
-    }
+    HsvRange::new([lo, (s as f64 * 0.6) as u8, 20], [hi, 255, 255])
+}
+
+/// An albedo (RGB in [0, 1]) as the 8-bit colour a pixel lit at full
+/// strength shows.
+pub(crate) fn albedo_rgb8(color: [f64; 3]) -> [u8; 3] {
+    color.map(|x| libm::round(x * 255.0).clamp(0.0, 255.0) as u8)
 }
 
 #[cfg(test)]

@@ -95,15 +95,21 @@ pub struct HsvRange {
 impl Default for HsvRange {
     /// TrackDLO's thresholds for a blue rope: lower (90, 90, 30), upper (130, 255, 255).
     fn default() -> Self {
-        Self {
-            lower: [90, 90, 30],
-            upper: [130, 255, 255],
-            chroma_noise: 0,
-        }
+        Self::new([90, 90, 30], [130, 255, 255])
     }
 }
 
 impl HsvRange {
+    /// OpenCV's box from `lower` to `upper` (`[h, s, v]`), no colour noise
+    /// allowed for.
+    pub const fn new(lower: [u8; 3], upper: [u8; 3]) -> Self {
+        Self {
+            lower,
+            upper,
+            chroma_noise: 0,
+        }
+    }
+
     /// Checks the bounds (hue in range, S and V not inverted).
     pub fn validate(&self) -> Result<(), SegmentationError> {
         for h in [self.lower[0], self.upper[0]] {
@@ -142,11 +148,10 @@ impl HsvRange {
     pub fn around(rgb: [u8; 3]) -> Self {
         let [h, s, v] = rgb_to_hsv(rgb);
         if v < PICK_DARK_VALUE {
-            return Self {
-                lower: [0, 0, 0],
-                upper: [HUE_MAX, 255, v.saturating_add(PICK_DARK_VALUE_ABOVE)],
-                chroma_noise: 0,
-            };
+            return Self::new(
+                [0, 0, 0],
+                [HUE_MAX, 255, v.saturating_add(PICK_DARK_VALUE_ABOVE)],
+            );
         }
         if s < PICK_GREY_SATURATION {
             return Self {
@@ -158,16 +163,15 @@ impl HsvRange {
         let hues = u16::from(HUE_MAX) + 1;
         let lower_h = (u16::from(h) + hues - u16::from(PICK_HUE_HALF_WIDTH)) % hues;
         let upper_h = (u16::from(h) + u16::from(PICK_HUE_HALF_WIDTH)) % hues;
-        Self {
-            lower: [
+        Self::new(
+            [
                 lower_h as u8,
                 s.saturating_sub(PICK_SATURATION_BELOW)
                     .max(PICK_MIN_SATURATION),
                 v.saturating_sub(PICK_VALUE_BELOW).max(PICK_MIN_VALUE),
             ],
-            upper: [upper_h as u8, 255, 255],
-            chroma_noise: 0,
-        }
+            [upper_h as u8, 255, 255],
+        )
     }
 
     /// `true` when the HSV triple lies in the box.
@@ -746,16 +750,8 @@ mod tests {
         let f = Frame::new(2704, 52, &color, &depth, 0.001).expect("frame");
         for range in [
             HsvRange::default(),
-            HsvRange {
-                lower: [170, 50, 40],
-                upper: [8, 230, 250],
-                chroma_noise: 0,
-            },
-            HsvRange {
-                lower: [0, 0, 0],
-                upper: [179, 255, 255],
-                chroma_noise: 0,
-            },
+            HsvRange::new([170, 50, 40], [8, 230, 250]),
+            HsvRange::new([0, 0, 0], [179, 255, 255]),
             // A grey rope's range: its own saturation, 20 levels of noise.
             HsvRange {
                 lower: [0, 0, 40],
@@ -789,11 +785,7 @@ mod tests {
         let levels: Vec<u8> = (0..=255u8).step_by(5).chain([1, 2, 254]).collect();
         for lo in (0..=HUE_MAX).step_by(7) {
             for hi in (0..=HUE_MAX).step_by(11) {
-                let range = HsvRange {
-                    lower: [lo, 0, 0],
-                    upper: [hi, 255, 255],
-                    chroma_noise: 0,
-                };
+                let range = HsvRange::new([lo, 0, 0], [hi, 255, 255]);
                 let sectors = hue_sectors(&range);
                 let mut rejected = 0usize;
                 for &r in &levels {
@@ -816,23 +808,11 @@ mod tests {
                 }
             }
         }
-        let green = HsvRange {
-            lower: [35, 0, 0],
-            upper: [85, 255, 255],
-            chroma_noise: 0,
-        };
+        let green = HsvRange::new([35, 0, 0], [85, 255, 255]);
         assert_eq!(hue_sectors(&green), [0, 1, 1, 0, 0, 0]);
-        let red = HsvRange {
-            lower: [170, 0, 0],
-            upper: [8, 255, 255],
-            chroma_noise: 0,
-        };
+        let red = HsvRange::new([170, 0, 0], [8, 255, 255]);
         assert_eq!(hue_sectors(&red), [1, 0, 0, 0, 0, 1]);
-        let everything = HsvRange {
-            lower: [5, 0, 0],
-            upper: [3, 255, 255],
-            chroma_noise: 0,
-        };
+        let everything = HsvRange::new([5, 0, 0], [3, 255, 255]);
         assert_eq!(hue_sectors(&everything), [1; 6]);
     }
 
@@ -870,11 +850,7 @@ mod tests {
                     // Hue may wrap (lower > upper); S and V are ordered.
                     (lower[c], upper[c]) = if c == 0 { (a, b) } else { (a.min(b), a.max(b)) };
                 }
-                let range = HsvRange {
-                    lower,
-                    upper,
-                    chroma_noise: 0,
-                };
+                let range = HsvRange::new(lower, upper);
                 let m = segment(&f, &range, &[]);
                 for (i, px) in color.chunks_exact(3).enumerate() {
                     let want = range.contains(rgb_to_hsv([px[0], px[1], px[2]]));
@@ -910,11 +886,7 @@ mod tests {
             let n = want.len();
             let depth = alloc::vec![0u16; n];
             let f = Frame::new(n as u32, 1, &color, &depth, 0.001).expect("frame");
-            let range = HsvRange {
-                lower: [0, s_lo as u8, 0],
-                upper: [179, 255, 255],
-                chroma_noise: 0,
-            };
+            let range = HsvRange::new([0, s_lo as u8, 0], [179, 255, 255]);
             assert_eq!(segment(&f, &range, &[]).data, want, "s_lo {s_lo}");
         }
     }
@@ -947,11 +919,7 @@ mod tests {
             let n = want.len();
             let depth = alloc::vec![0u16; n];
             let f = Frame::new(n as u32 / 2, 2, &color, &depth, 0.001).expect("frame");
-            let range = HsvRange {
-                lower: [0, 0, 0],
-                upper: [179, s_hi as u8, 255],
-                chroma_noise: 0,
-            };
+            let range = HsvRange::new([0, 0, 0], [179, s_hi as u8, 255]);
             assert_eq!(segment(&f, &range, &[]).data, want, "s_hi {s_hi}");
         }
     }
@@ -962,11 +930,7 @@ mod tests {
     fn chroma_intervals_hold_exactly_the_passing_chroma() {
         for s_lo in (0..=255).step_by(17) {
             for s_hi in (s_lo..=255).step_by(23) {
-                let range = HsvRange {
-                    lower: [0, s_lo as u8, 30],
-                    upper: [179, s_hi as u8, 240],
-                    chroma_noise: 0,
-                };
+                let range = HsvRange::new([0, s_lo as u8, 30], [179, s_hi as u8, 240]);
                 let table = chroma_intervals(&range);
                 for v in 0..256i32 {
                     for d in 0..=v {
@@ -1122,11 +1086,7 @@ mod tests {
 
     #[test]
     fn the_hsv_box_needs_every_channel_inside() {
-        let r = HsvRange {
-            lower: [100, 50, 60],
-            upper: [120, 200, 210],
-            chroma_noise: 0,
-        };
+        let r = HsvRange::new([100, 50, 60], [120, 200, 210]);
         assert!(r.contains([110, 100, 100]));
         for hsv in [
             [99, 100, 100],
@@ -1139,37 +1099,19 @@ mod tests {
             assert!(!r.contains(hsv), "{hsv:?}");
         }
         // Equal bounds are a valid (one-value) range.
-        assert!(HsvRange {
-            lower: [0, 100, 50],
-            upper: [179, 100, 50],
-            chroma_noise: 0
-        }
-        .validate()
-        .is_ok());
+        assert!(HsvRange::new([0, 100, 50], [179, 100, 50])
+            .validate()
+            .is_ok());
         // Hue 179 is the last valid one.
-        assert!(HsvRange {
-            lower: [0, 0, 0],
-            upper: [179, 255, 255],
-            chroma_noise: 0
-        }
-        .validate()
-        .is_ok());
-        assert!(HsvRange {
-            lower: [180, 0, 0],
-            upper: [179, 255, 255],
-            chroma_noise: 0
-        }
-        .validate()
-        .is_err());
+        assert!(HsvRange::new([0, 0, 0], [179, 255, 255]).validate().is_ok());
+        assert!(HsvRange::new([180, 0, 0], [179, 255, 255])
+            .validate()
+            .is_err());
     }
 
     #[test]
     fn hue_range_wraps_through_zero() {
-        let red = HsvRange {
-            lower: [170, 100, 50],
-            upper: [10, 255, 255],
-            chroma_noise: 0,
-        };
+        let red = HsvRange::new([170, 100, 50], [10, 255, 255]);
         assert!(red.validate().is_ok());
         assert!(red.contains([175, 200, 200]));
         assert!(red.contains([5, 200, 200]));
@@ -1178,11 +1120,7 @@ mod tests {
 
     #[test]
     fn bad_ranges_are_rejected() {
-        let r = HsvRange {
-            lower: [0, 200, 0],
-            upper: [179, 100, 255],
-            chroma_noise: 0,
-        };
+        let r = HsvRange::new([0, 200, 0], [179, 100, 255]);
         assert!(matches!(
             r.validate(),
             Err(SegmentationError::InvertedRange {
@@ -1190,11 +1128,7 @@ mod tests {
                 ..
             })
         ));
-        let r = HsvRange {
-            lower: [0, 0, 0],
-            upper: [200, 255, 255],
-            chroma_noise: 0,
-        };
+        let r = HsvRange::new([0, 0, 0], [200, 255, 255]);
         assert!(matches!(
             r.validate(),
             Err(SegmentationError::HueOutOfRange { value: 200 })

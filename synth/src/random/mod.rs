@@ -19,8 +19,8 @@ use upetrack::{CameraIntrinsics, HsvRange};
 pub use crate::camera_path::{CameraPath, Wobble};
 
 use crate::layout::loop_shape;
-use crate::render::rope_hsv;
 use crate::render::RenderSettings;
+use crate::render::{albedo_rgb8, rope_hsv};
 use crate::rope::{Rope, RopeSettings};
 use crate::variant::D435I_1280X720;
 
@@ -373,12 +373,11 @@ fn kept_out_range(rgb: [f64; 3]) -> HsvRange {
     if range.chroma_noise == 0 {
         return range;
     }
-    let [_, s, v] = rgb_to_hsv(rgb.map(|x| libm::round(x * 255.0).clamp(0.0, 255.0) as u8));
-    HsvRange {
-        lower: [0, 0, v.saturating_sub(PICK_VALUE_BELOW)],
-        upper: [HUE_MAX, s.saturating_add(KEPT_OUT_GREY_SATURATION), 255],
-        chroma_noise: 0,
-    }
+    let [_, s, v] = rgb_to_hsv(albedo_rgb8(rgb));
+    HsvRange::new(
+        [0, 0, v.saturating_sub(PICK_VALUE_BELOW)],
+        [HUE_MAX, s.saturating_add(KEPT_OUT_GREY_SATURATION), 255],
+    )
 }
 
 /// `true` when a surface of albedo `rgb` falls in `range` at some shade.
