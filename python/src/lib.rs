@@ -248,11 +248,13 @@ impl Tracker {
                 "depth_scale: {depth_scale} is not a positive number of metres per unit"
             )));
         }
-        let hsv = hsv.map_or_else(HsvRange::default, |((a, b, c), (d, e, f))| HsvRange {
-            lower: [a, b, c],
-            upper: [d, e, f],
-            chroma_noise,
+        let bounds = hsv.map_or_else(HsvRange::default, |((a, b, c), (d, e, f))| {
+            HsvRange::new([a, b, c], [d, e, f])
         });
+        let hsv = HsvRange {
+            chroma_noise,
+            ..bounds
+        };
         let inner =
             upetrack::Tracker::new(params, intrinsics.camera(), hsv).map_err(tracker_error)?;
         Ok(Self {
