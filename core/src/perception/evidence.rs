@@ -141,7 +141,7 @@ impl Evidence<'_> {
         }
         if measured == 0 {
             Sight::Unknown
-        } else if nearer >= self.occluder_pixels(p.z, measured) {
+        } else if nearer > 0 && nearer >= self.occluder_pixels(p.z, measured) {
             Sight::Occluded
         } else {
             Sight::FreeSpace
