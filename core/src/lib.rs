@@ -49,6 +49,7 @@ extern crate std;
 pub mod baselines;
 pub mod math;
 pub mod metrics;
+pub mod motion;
 pub mod params;
 pub mod perception;
 pub mod polyline;

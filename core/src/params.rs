@@ -68,6 +68,13 @@ pub struct Params {
     /// re-initialise (accepted under `reinit_length_fraction`): the rope may
     /// have jumped. 0 turns it off. Default 0.5.
     pub reinit_visible_fraction: f64,
+    /// Follow the camera's own motion: estimate it from the background
+    /// ([`crate::perception::ego_motion`]: the textured pixels that are
+    /// neither rope nor declared occluder) and move the tracked rope with
+    /// it before each step, so that a rope at rest stays at rest in the
+    /// world when the camera is on an arm or in a hand. Shared by every
+    /// algorithm. Default true.
+    pub follow_camera: bool,
     /// UPETrack's registration and occlusion-estimate parameters (in a
     /// file: at the top level).
     #[cfg_attr(feature = "serde", serde(flatten))]
@@ -103,6 +110,7 @@ impl Default for Params {
             min_blob_pixels: 150,
             reinit_length_fraction: 0.8,
             reinit_visible_fraction: 0.5,
+            follow_camera: true,
             upetrack: UpeTrackParams::default(),
             algorithm: Algorithm::Upetrack,
             cpd: CpdSettings::default(),

@@ -179,6 +179,13 @@ pub const PARAMETERS: &[ParamInfo] = &[
         ParamKind::Bool,
     ),
     p(
+        "follow_camera",
+        Shared,
+        "cam.",
+        "Estimate the camera's own motion from the background and move the tracked rope with it",
+        ParamKind::Bool,
+    ),
+    p(
         "min_depth",
         Shared,
         "z_min",

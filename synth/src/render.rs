@@ -131,6 +131,18 @@ impl CameraPose {
         )
     }
 
+    /// The motion of points at rest in the world from this pose's camera
+    /// frame to `next`'s.
+    pub fn motion_to(&self, next: &CameraPose) -> upetrack::motion::RigidMotion {
+        let rows = |p: &CameraPose| nalgebra::Matrix3::from_rows(&p.rows.map(|r| r.transpose()));
+        upetrack::motion::RigidMotion::between_camera_poses(
+            &rows(self),
+            &self.centre,
+            &rows(next),
+            &next.centre,
+        )
+    }
+
     /// A world-frame direction in the camera frame.
     pub fn direction_to_camera(&self, d: &Vec3) -> Vec3 {
         Vec3::new(

@@ -15,7 +15,7 @@ use crate::layout::{
     arc_shape, bends_shape, gripper, hairpin_shape, lift_upper_strand, loop_shape, lying, s_shape,
 };
 use crate::random::RandomScene;
-use crate::render::{hidden_by_boxes, render, rope_hsv, OccluderBox, RenderSettings};
+use crate::render::{hidden_by_boxes, render, rope_hsv, CameraPose, OccluderBox, RenderSettings};
 use crate::rope::{Rope, RopeSettings};
 use crate::variant::Variant;
 use crate::MAX_FRAMES;
@@ -208,6 +208,8 @@ pub struct SynthFrame {
     /// For each ground-truth point: hidden by an occluder (a box between it
     /// and the camera, or an occlusion rectangle over its pixel).
     pub occluded: Vec<bool>,
+    /// Where the camera was (the ground truth of its own motion).
+    pub camera_pose: CameraPose,
 }
 
 /// A grasp moving a particle from its settled position by `offset` between two frames.
@@ -839,6 +841,7 @@ impl Scenario {
             depth: r.depth,
             groundtruth,
             occluded,
+            camera_pose: pose,
         })
     }
 

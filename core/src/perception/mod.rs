@@ -4,9 +4,11 @@
 //! [`point_cloud`] (masked pixels with depth, voxel grid, pushed to the
 //! rope's axis), [`initialisation`] (the ordered centre line and `M`
 //! nodes when there is no state), and [`evidence`] (what the images say
-//! about a point: hidden by something, or in free space).
+//! about a point: hidden by something, or in free space), and
+//! [`ego_motion`] (the camera's own motion, from the background).
 
 pub mod camera;
+pub mod ego_motion;
 pub mod evidence;
 pub mod frame;
 pub mod initialisation;

@@ -7,8 +7,10 @@ use alloc::vec::Vec;
 
 use crate::baselines::trackdlo::TrackDloReport;
 use crate::math::{self, Vec2, Vec3};
+use crate::motion::RigidMotion;
 use crate::params::{Params, ParamsError};
 use crate::perception::camera::{CameraError, CameraIntrinsics};
+use crate::perception::ego_motion::{camera_motion, BackgroundView, CameraMotion};
 use crate::perception::evidence::Evidence;
 use crate::perception::frame::{Frame, FrameError};
 use crate::perception::initialisation::{
@@ -71,6 +73,9 @@ pub enum TrackerError {
     /// An invalid rope prior.
     #[error(transparent)]
     Prior(#[from] PriorError),
+    /// A camera motion with a non-finite entry.
+    #[error("the camera's motion has a non-finite entry")]
+    CameraMotion,
     /// A snapshot that no tracker could have taken.
     #[error("a snapshot the tracker cannot return to: {reason}")]
     Snapshot {
@@ -268,6 +273,12 @@ pub struct Tracker {
     prior: RopePrior,
     /// A pixel on the rope the user clicked, for the next initialisation.
     hint: Option<Vec2>,
+    /// The last frame's background, for the camera's motion since.
+    background: Option<BackgroundView>,
+    /// The camera's motion was given for the next frame (`move_camera`).
+    camera_given: bool,
+    /// The camera's motion estimated on the last frame.
+    camera_motion: Option<CameraMotion>,
 }
 
 impl Tracker {
@@ -293,6 +304,9 @@ impl Tracker {
             stepper: Stepper::new(params.algorithm),
             prior: RopePrior::default(),
             hint: None,
+            background: None,
+            camera_given: false,
+            camera_motion: None,
         })
     }
 
@@ -304,6 +318,63 @@ impl Tracker {
         prior.validate()?;
         self.prior = prior;
         Ok(())
+    }
+
+    /// The camera moved by `motion` since the last frame (where a point at
+    /// rest in the world goes, from the last frame's camera coordinates to
+    /// the next's: a robot arm's kinematics, an IMU, or the
+    /// background's motion): the tracked rope is moved with it,
+    /// so that the next step starts from where a rope at rest now is.
+    pub fn move_camera(&mut self, motion: &RigidMotion) -> Result<(), TrackerError> {
+        if !motion.is_finite() {
+            return Err(TrackerError::CameraMotion);
+        }
+        self.camera_given = true;
+        self.carry_state(motion);
+        Ok(())
+    }
+
+    /// The tracked nodes moved as points at rest move under `motion`.
+    fn carry_state(&mut self, motion: &RigidMotion) {
+        if let Some(state) = self.state.as_mut() {
+            for p in state.nodes.iter_mut() {
+                *p = motion.apply(p);
+            }
+        }
+    }
+
+    /// The camera's motion estimated from the background on the last
+    /// frame (`follow_camera`), when one was significant.
+    pub fn camera_motion(&self) -> Option<&CameraMotion> {
+        self.camera_motion.as_ref()
+    }
+
+    /// With `follow_camera`: the camera's motion from the last frame's
+    /// background to `frame`'s, applied to the state (unless the caller
+    /// gave it), and `frame`'s background kept for the next.
+    fn follow_camera(&mut self, frame: &Frame<'_>, obs: &Observation) {
+        self.camera_motion = None;
+        if !self.params.follow_camera {
+            self.background = None;
+            return;
+        }
+        let view = BackgroundView::new(
+            frame,
+            &self.camera,
+            &obs.mask,
+            &obs.occlusions,
+            (self.params.min_depth, self.params.max_depth),
+        );
+        if !self.camera_given && self.state.is_some() {
+            if let Some(last) = &self.background {
+                self.camera_motion = camera_motion(last, &view);
+            }
+        }
+        if let Some(m) = self.camera_motion {
+            self.carry_state(&m.motion);
+        }
+        self.camera_given = false;
+        self.background = Some(view);
     }
 
     /// The rope prior in force.
@@ -358,6 +429,7 @@ impl Tracker {
             let nodes = self.nodes().to_vec();
             self.stepper.start(&nodes);
         }
+        self.forget_background();
         Ok(())
     }
 
@@ -432,6 +504,15 @@ impl Tracker {
         self.refused_jump_cloud = None;
         self.recovery = RecoveryBackoff::default();
         self.stepper = Stepper::new(self.params.algorithm);
+        self.forget_background();
+    }
+
+    /// The next frame is not the last one's successor (a reset, a
+    /// snapshot restored): no camera motion is estimated across them.
+    fn forget_background(&mut self) {
+        self.background = None;
+        self.camera_given = false;
+        self.camera_motion = None;
     }
 
     /// Segmentation and point cloud of `frame`, with `occlusions` blacked out.
@@ -509,6 +590,7 @@ impl Tracker {
     /// The tracking step on an observation of `frame`. Never fails: a frame
     /// that cannot be tracked is reported as lost and the state is kept.
     pub fn update(&mut self, frame: &Frame<'_>, obs: &Observation) -> FrameOutput {
+        self.follow_camera(frame, obs);
         let Some(state) = self.state.as_ref() else {
             return self.initialise_or_lose(frame, obs, Loss::NeverInitialised);
         };

@@ -10,6 +10,8 @@ use alloc::vec::Vec;
 use nalgebra::{Matrix3, SMatrix, SVector};
 
 use crate::math::Vec3;
+pub use crate::motion::RigidMotion;
+use crate::motion::rotation_of;
 
 /// Fewest visible nodes a shared motion is estimated from: three
 /// non-collinear points fix a rotation.
@@ -32,30 +34,6 @@ const CAUCHY_SCALE: f64 = 2.385;
 /// The median absolute residual times this is the standard deviation of
 /// Gaussian residuals.
 const MAD_TO_SIGMA: f64 = 1.4826;
-
-/// A rigid motion `p -> rotation * p + translation`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RigidMotion {
-    /// Rotation.
-    pub rotation: Matrix3<f64>,
-    /// Translation, metres.
-    pub translation: Vec3,
-}
-
-impl RigidMotion {
-    /// No motion.
-    pub fn identity() -> Self {
-        Self {
-            rotation: Matrix3::identity(),
-            translation: Vec3::zeros(),
-        }
-    }
-
-    /// Where `p` goes.
-    pub fn apply(&self, p: &Vec3) -> Vec3 {
-        self.rotation * p + self.translation
-    }
-}
 
 /// The rope's unit tangent at node `k` of `chain` (the central difference
 /// of its neighbours), or `None` where the chain gives no direction.
@@ -100,17 +78,6 @@ fn fit_across(
     x.iter()
         .all(|v| v.is_finite())
         .then(|| (Vec3::new(x[0], x[1], x[2]), Vec3::new(x[3], x[4], x[5])))
-}
-
-/// The rotation of rotation vector `omega` (Rodrigues).
-fn rotation_of(omega: &Vec3) -> Matrix3<f64> {
-    let angle = omega.norm();
-    if angle < 1e-12 {
-        return Matrix3::identity();
-    }
-    let k = omega / angle;
-    let kx = Matrix3::new(0.0, -k.z, k.y, k.z, 0.0, -k.x, -k.y, k.x, 0.0);
-    Matrix3::identity() + kx * libm::sin(angle) + kx * kx * (1.0 - libm::cos(angle))
 }
 
 /// The rigid motion most of the visible nodes share from `previous` to

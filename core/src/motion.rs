@@ -1,0 +1,84 @@
+//! Rigid motions (a rotation and a translation): the camera's own motion
+//! between two frames, and the motion the visible rope shares.
+
+use nalgebra::Matrix3;
+
+use crate::math::Vec3;
+
+/// A rigid motion `p -> rotation * p + translation`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RigidMotion {
+    /// Rotation.
+    pub rotation: Matrix3<f64>,
+    /// Translation, metres.
+    pub translation: Vec3,
+}
+
+impl RigidMotion {
+    /// No motion.
+    pub fn identity() -> Self {
+        Self {
+            rotation: Matrix3::identity(),
+            translation: Vec3::zeros(),
+        }
+    }
+
+    /// Where `p` goes.
+    pub fn apply(&self, p: &Vec3) -> Vec3 {
+        self.rotation * p + self.translation
+    }
+}
+
+impl RigidMotion {
+    /// The motion of points fixed in the world as seen from a camera that
+    /// moved from pose `(from_rows, from_centre)` to `(to_rows, to_centre)`
+    /// (rows: the camera's axes in world coordinates; centre: its position):
+    /// a point's coordinates in the first camera's frame to those in the
+    /// second's.
+    pub fn between_camera_poses(
+        from_rows: &Matrix3<f64>,
+        from_centre: &Vec3,
+        to_rows: &Matrix3<f64>,
+        to_centre: &Vec3,
+    ) -> Self {
+        let rotation = to_rows * from_rows.transpose();
+        Self {
+            rotation,
+            translation: to_rows * (from_centre - to_centre),
+        }
+    }
+
+    /// `true` when every entry is finite.
+    pub fn is_finite(&self) -> bool {
+        self.rotation.iter().all(|v| v.is_finite()) && self.translation.iter().all(|v| v.is_finite())
+    }
+}
+
+/// The rotation of rotation vector `omega` (Rodrigues).
+pub fn rotation_of(omega: &Vec3) -> Matrix3<f64> {
+    let angle = omega.norm();
+    if angle < 1e-12 {
+        return Matrix3::identity();
+    }
+    let k = omega / angle;
+    let kx = Matrix3::new(0.0, -k.z, k.y, k.z, 0.0, -k.x, -k.y, k.x, 0.0);
+    Matrix3::identity() + kx * libm::sin(angle) + kx * kx * (1.0 - libm::cos(angle))
+}
+
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_camera_that_moved_sees_a_world_point_where_its_new_pose_puts_it() {
+        let from_rows = rotation_of(&Vec3::new(0.1, -0.2, 0.05));
+        let to_rows = rotation_of(&Vec3::new(0.12, -0.15, 0.0));
+        let (c0, c1) = (Vec3::new(0.0, -0.3, 0.8), Vec3::new(0.03, -0.28, 0.79));
+        let world = Vec3::new(0.2, 0.1, 0.0);
+        let seen0 = from_rows * (world - c0);
+        let seen1 = to_rows * (world - c1);
+        let motion = RigidMotion::between_camera_poses(&from_rows, &c0, &to_rows, &c1);
+        assert!((motion.apply(&seen0) - seen1).norm() < 1e-12);
+    }
+}

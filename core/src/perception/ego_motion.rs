@@ -1,0 +1,711 @@
+//! The camera's own motion between two frames, from the background: a
+//! camera on a robot arm or in a hand moves everything at rest in the
+//! world, the hidden part of a rope too. Direct RGB-D odometry: the
+//! rigid motion that best carries the last frame's textured background
+//! pixels (brightness and depth) onto this frame's, coarse to fine, with
+//! the rope, the declared occluders and whatever moved on its own weighed
+//! out by a robust loss. Taken only when it explains the images
+//! significantly better than no motion, so a still camera reads still.
+
+use alloc::vec;
+use alloc::vec::Vec;
+
+use nalgebra::{Matrix3, SMatrix, SVector};
+
+use crate::math::Vec3;
+use crate::motion::{rotation_of, RigidMotion};
+use crate::perception::camera::CameraIntrinsics;
+use crate::perception::frame::Frame;
+use crate::perception::segmentation::{Mask, Rect};
+
+/// Width, pixels, the finest level is box-averaged down to (at most): the
+/// motion of a background a metre away is then found to a fraction of a
+/// full-resolution pixel at a tenth of the cost of the full image.
+pub const FINEST_WIDTH: u32 = 320;
+/// Width, pixels, at which halving stops: the coarsest level still has a
+/// few hundred textured pixels and catches a move of several pixels.
+pub const COARSEST_WIDTH: u32 = 80;
+/// Most background pixels followed per level (one per grid cell).
+pub const MAX_POINTS: usize = 1500;
+/// Fewest background pixels (with texture and depth) a motion is
+/// estimated from at the finest level; six unknowns need many more.
+pub const MIN_POINTS: usize = 60;
+/// Smallest brightness gradient (grey levels per pixel of the level) of a
+/// followed pixel: below it a cell is flat and says nothing.
+pub const GRADIENT_FLOOR: f32 = 1.5;
+/// A followed pixel's gradient is at least this many times the image
+/// noise's gradient scale (a flat pixel's gradient is Rayleigh distributed
+/// with scale `sigma / sqrt 2`; one in ten thousand passes, so that few of
+/// a plain table's grid cells, each the best of some fifty pixels, offer
+/// noise as texture).
+pub const GRADIENT_NOISE_SCALES: f64 = 4.29;
+/// A motion moving the followed pixels by less than this on average
+/// (pixels of the finest level) is below what the images resolve: taken
+/// as none. Interpolating a noisy image between pixels smooths its noise,
+/// which a sub-pixel fit of a still camera would otherwise take for a
+/// significant gain.
+pub const MIN_RESOLVED_SHIFT: f64 = 0.1;
+/// Gauss-Newton iterations per level, at most.
+const MAX_ITERATIONS: usize = 12;
+/// An update smaller than this (metres, radians) ends a level's iterations.
+const CONVERGED: f64 = 1e-6;
+/// The Cauchy loss's scale in robust standard deviations of the residuals
+/// (95 % efficiency on Gaussian noise). A redescending loss: a box or a
+/// hand moving over the table weighs next to nothing once the still
+/// background is matched, where Huber's would still pull.
+const CAUCHY: f64 = 2.385;
+/// Share of the compared background pixels the motion must explain better
+/// than no motion: the camera moves all of the background, a box or a hand
+/// only its part.
+const WHOLE_BACKGROUND_SHARE: f64 = 0.5;
+/// The median absolute residual times this is the standard deviation of
+/// Gaussian residuals.
+const MAD_TO_SIGMA: f64 = 1.4826;
+/// Smallest brightness noise assumed, grey levels (8-bit images quantise).
+const MIN_BRIGHTNESS_SIGMA: f64 = 0.5;
+/// Smallest depth noise assumed, metres (millimetre depth units).
+const MIN_DEPTH_SIGMA: f64 = 0.0005;
+/// A block's depths agree (one surface) when their spread is within this
+/// share of their mean.
+const DEPTH_AGREEMENT: f32 = 0.02;
+/// The chi-square of six degrees of freedom at 0.999: how much better (in
+/// units of the residuals' variance) the motion must explain the images
+/// than no motion to be taken.
+const SIGNIFICANCE: f64 = 22.46;
+/// Ridge on the normal equations, relative to their mean curvature: what
+/// the background leaves undetermined (a flat, plain table's slide) is
+/// taken as no motion.
+const RIDGE: f64 = 1e-6;
+
+/// One level of a frame's pyramid.
+#[derive(Debug, Clone)]
+struct Level {
+    width: usize,
+    height: usize,
+    /// Brightness, grey levels.
+    grey: Vec<f32>,
+    /// Depth, metres; 0 where unknown or across an edge.
+    depth: Vec<f32>,
+    /// Background: not the rope, not a declared occluder.
+    background: Vec<bool>,
+    fx: f64,
+    fy: f64,
+    cx: f64,
+    cy: f64,
+}
+
+impl Level {
+    fn at(&self, u: usize, v: usize) -> usize {
+        v * self.width + u
+    }
+
+    /// Central-difference brightness gradient at an inner pixel.
+    fn gradient(&self, u: usize, v: usize) -> (f32, f32) {
+        let i = self.at(u, v);
+        (
+            0.5 * (self.grey[i + 1] - self.grey[i - 1]),
+            0.5 * (self.grey[i + self.width] - self.grey[i - self.width]),
+        )
+    }
+
+    /// The level below, halved by 2x2 averages.
+    fn halved(&self) -> Self {
+        let (w, h) = (self.width / 2, self.height / 2);
+        let mut grey = vec![0.0; w * h];
+        let mut depth = vec![0.0; w * h];
+        let mut background = vec![false; w * h];
+        for v in 0..h {
+            for u in 0..w {
+                let ids = [
+                    self.at(2 * u, 2 * v),
+                    self.at(2 * u + 1, 2 * v),
+                    self.at(2 * u, 2 * v + 1),
+                    self.at(2 * u + 1, 2 * v + 1),
+                ];
+                let o = v * w + u;
+                grey[o] = 0.25 * ids.iter().map(|&i| self.grey[i]).sum::<f32>();
+                depth[o] = agreed_depth(ids.iter().map(|&i| self.depth[i]));
+                background[o] = ids.iter().all(|&i| self.background[i]);
+            }
+        }
+        Self {
+            width: w,
+            height: h,
+            grey,
+            depth,
+            background,
+            fx: 0.5 * self.fx,
+            fy: 0.5 * self.fy,
+            cx: 0.5 * (self.cx + 0.5) - 0.5,
+            cy: 0.5 * (self.cy + 0.5) - 0.5,
+        }
+    }
+}
+
+/// The mean of `depths` when all are known and agree (one surface), else 0.
+fn agreed_depth(depths: impl Iterator<Item = f32>) -> f32 {
+    let (mut lo, mut hi, mut sum, mut n) = (f32::INFINITY, 0.0f32, 0.0f32, 0u32);
+    for z in depths {
+        if !(z > 0.0) {
+            return 0.0;
+        }
+        lo = lo.min(z);
+        hi = hi.max(z);
+        sum += z;
+        n += 1;
+    }
+    if n == 0 {
+        return 0.0;
+    }
+    let mean = sum / n as f32;
+    if hi - lo <= DEPTH_AGREEMENT * mean {
+        mean
+    } else {
+        0.0
+    }
+}
+
+/// What the motion estimate keeps of one frame: its pyramid, finest first.
+#[derive(Debug, Clone)]
+pub struct BackgroundView {
+    levels: Vec<Level>,
+}
+
+impl BackgroundView {
+    /// The pyramid of `frame` seen by `camera` (the frame's own size),
+    /// with the `rope` mask (and a pixel round it) and the declared
+    /// `occluders` left out of the background; depths outside
+    /// `min_depth..=max_depth` metres are unknown.
+    pub fn new(
+        frame: &Frame<'_>,
+        camera: &CameraIntrinsics,
+        rope: &Mask,
+        occluders: &[Rect],
+        depth_range: (f64, f64),
+    ) -> Self {
+        let (fw, fh) = (frame.width as usize, frame.height as usize);
+        let s = (frame.width.div_ceil(FINEST_WIDTH)).max(1) as usize;
+        let (w, h) = (fw / s, fh / s);
+        let mut excluded = vec![false; w * h];
+        let rope_fits = rope.width == frame.width && rope.height == frame.height;
+        let (zmin, zmax) = (depth_range.0 as f32, depth_range.1 as f32);
+        let scale = frame.depth_scale as f32;
+        let mut grey = vec![0.0f32; w * h];
+        let mut depth = vec![0.0f32; w * h];
+        let inv = 1.0 / (s * s) as f32;
+        for v in 0..h {
+            for u in 0..w {
+                let (mut g, mut masked) = (0u32, false);
+                for y in v * s..(v + 1) * s {
+                    let row = y * fw;
+                    for x in u * s..(u + 1) * s {
+                        let c = &frame.color[3 * (row + x)..3 * (row + x) + 3];
+                        // Luma close enough, in integers: (R + 2G + B) / 4.
+                        g += c[0] as u32 + 2 * c[1] as u32 + c[2] as u32;
+                        masked |= rope_fits && rope.data[row + x];
+                    }
+                }
+                let o = v * w + u;
+                grey[o] = 0.25 * g as f32 * inv;
+                excluded[o] = masked;
+                depth[o] = agreed_depth((v * s..(v + 1) * s).flat_map(|y| {
+                    (u * s..(u + 1) * s).map(move |x| {
+                        let z = frame.depth[y * fw + x] as f32 * scale;
+                        if z >= zmin && z <= zmax {
+                            z
+                        } else {
+                            0.0
+                        }
+                    })
+                }));
+            }
+        }
+        // The rope's edge and shadow move with it: one pixel round the mask.
+        let mut background = vec![true; w * h];
+        for v in 0..h {
+            for u in 0..w {
+                if excluded[v * w + u] {
+                    for y in v.saturating_sub(1)..(v + 2).min(h) {
+                        for x in u.saturating_sub(1)..(u + 2).min(w) {
+                            background[y * w + x] = false;
+                        }
+                    }
+                }
+            }
+        }
+        for r in occluders {
+            if let Some((x0, x1, y0, y1)) = r.clip(frame.width, frame.height) {
+                for v in y0 / s..y1.div_ceil(s).min(h) {
+                    for b in &mut background[v * w + x0 / s..v * w + x1.div_ceil(s).min(w)] {
+                        *b = false;
+                    }
+                }
+            }
+        }
+        let sf = s as f64;
+        let mut levels = vec![Level {
+            width: w,
+            height: h,
+            grey,
+            depth,
+            background,
+            fx: camera.fx / sf,
+            fy: camera.fy / sf,
+            cx: (camera.cx + 0.5) / sf - 0.5,
+            cy: (camera.cy + 0.5) / sf - 0.5,
+        }];
+        while let Some(last) = levels.last() {
+            if last.width as u32 <= COARSEST_WIDTH || last.height < 16 {
+                break;
+            }
+            let next = last.halved();
+            levels.push(next);
+        }
+        Self { levels }
+    }
+}
+
+/// A followed background pixel of the earlier frame.
+struct Template {
+    /// Where it is, metres, the earlier camera's frame.
+    point: Vec3,
+    /// Its brightness.
+    grey: f64,
+}
+
+/// The textured background pixels of `level`: in each cell of a grid, the
+/// one with the strongest gradient above [`GRADIENT_FLOOR`] and a depth.
+fn templates(level: &Level) -> Vec<Template> {
+    let floor = GRADIENT_FLOOR.max((GRADIENT_NOISE_SCALES * noise(level) / core::f64::consts::SQRT_2) as f32);
+    let area = level.width * level.height;
+    let cell = (libm::ceil(libm::sqrt(area as f64 / MAX_POINTS as f64)) as usize).max(1);
+    let mut out = Vec::new();
+    for cv in (1..level.height - 1).step_by(cell) {
+        for cu in (1..level.width - 1).step_by(cell) {
+            let mut best: Option<(f32, usize, usize)> = None;
+            for v in cv..(cv + cell).min(level.height - 1) {
+                for u in cu..(cu + cell).min(level.width - 1) {
+                    let i = level.at(u, v);
+                    if !level.background[i] || !(level.depth[i] > 0.0) {
+                        continue;
+                    }
+                    let (gx, gy) = level.gradient(u, v);
+                    let g = libm::sqrtf(gx * gx + gy * gy);
+                    if g >= floor && best.is_none_or(|b| g > b.0) {
+                        best = Some((g, u, v));
+                    }
+                }
+            }
+            if let Some((_, u, v)) = best {
+                let i = level.at(u, v);
+                let z = level.depth[i] as f64;
+                out.push(Template {
+                    point: Vec3::new(
+                        (u as f64 - level.cx) * z / level.fx,
+                        (v as f64 - level.cy) * z / level.fy,
+                        z,
+                    ),
+                    grey: level.grey[i] as f64,
+                });
+            }
+        }
+    }
+    out
+}
+
+/// The brightness noise of `level`'s background, grey levels: the robust
+/// spread of the Laplacian `4 I - (its four neighbours)`, whose variance is
+/// 20 times the noise's where the image is flat.
+fn noise(level: &Level) -> f64 {
+    let mut laplacian = Vec::new();
+    for v in 1..level.height - 1 {
+        for u in 1..level.width - 1 {
+            let i = level.at(u, v);
+            if level.background[i] {
+                let g = &level.grey;
+                let l = 4.0 * g[i] - g[i - 1] - g[i + 1] - g[i - level.width] - g[i + level.width];
+                laplacian.push(l as f64);
+            }
+        }
+    }
+    MAD_TO_SIGMA * median_abs(&mut laplacian) / libm::sqrt(20.0)
+}
+
+/// Bilinear brightness, its gradient and the nearest pixel's depth at
+/// `(x, y)` of a later frame's level, where that is background.
+fn sample(level: &Level, x: f64, y: f64) -> Option<(f64, f64, f64, f64)> {
+    if !(x >= 1.0 && y >= 1.0 && x < (level.width - 2) as f64 && y < (level.height - 2) as f64) {
+        return None;
+    }
+    let (u, v) = (x as usize, y as usize);
+    let (a, b) = ((x - u as f64) as f32, (y - v as f64) as f32);
+    let near = level.at(
+        if a < 0.5 { u } else { u + 1 },
+        if b < 0.5 { v } else { v + 1 },
+    );
+    if !level.background[near] {
+        return None;
+    }
+    let lerp = |f: &dyn Fn(usize, usize) -> f32| {
+        let top = f(u, v) * (1.0 - a) + f(u + 1, v) * a;
+        let bottom = f(u, v + 1) * (1.0 - a) + f(u + 1, v + 1) * a;
+        (top * (1.0 - b) + bottom * b) as f64
+    };
+    let grey = lerp(&|u, v| level.grey[level.at(u, v)]);
+    let gx = lerp(&|u, v| level.gradient(u, v).0);
+    let gy = lerp(&|u, v| level.gradient(u, v).1);
+    Some((grey, gx, gy, level.depth[near] as f64))
+}
+
+/// The Cauchy weight of a residual `r` in robust deviations.
+fn cauchy_weight(r: f64) -> f64 {
+    let x = r / CAUCHY;
+    1.0 / (1.0 + x * x)
+}
+
+/// The Cauchy loss of a residual in robust deviations (`r^2 / 2` near 0).
+fn cauchy_loss(r: f64) -> f64 {
+    let x = r / CAUCHY;
+    0.5 * CAUCHY * CAUCHY * libm::log1p(x * x)
+}
+
+/// The median of `|v|` (0 for none); reorders `v`.
+fn median_abs(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    for x in v.iter_mut() {
+        *x = x.abs();
+    }
+    let mid = v.len() / 2;
+    v.select_nth_unstable_by(mid, |a, b| a.total_cmp(b));
+    v[mid]
+}
+
+/// The residuals of the templates under `motion` on a later level: the
+/// brightness and the depth residual (where known), and their Jacobians
+/// in the motion's increment `(translation, rotation)`.
+/// One per template, `None` where it left the image or the background.
+type Rows = Vec<Option<Row>>;
+/// A template's brightness residual and its Jacobian, and its depth
+/// residual and Jacobian where the later depth is known.
+type Row = (f64, SVector<f64, 6>, Option<(f64, SVector<f64, 6>)>);
+
+fn residuals(templates: &[Template], later: &Level, motion: &RigidMotion) -> Rows {
+    let mut rows = Vec::with_capacity(templates.len());
+    for t in templates {
+        rows.push(residual(t, later, motion));
+    }
+    rows
+}
+
+/// [`residuals`] of one template.
+fn residual(t: &Template, later: &Level, motion: &RigidMotion) -> Option<Row> {
+    {
+        let p = motion.apply(&t.point);
+        if !(p.z > 0.0) {
+            return None;
+        }
+        let x = later.fx * p.x / p.z + later.cx;
+        let y = later.fy * p.y / p.z + later.cy;
+        let (grey, gx, gy, z) = sample(later, x, y)?;
+        // d(pixel)/d(point), then d(point)/d(increment) = [I | -[p]x].
+        let iz = 1.0 / p.z;
+        let du = Vec3::new(later.fx * iz, 0.0, -later.fx * p.x * iz * iz);
+        let dv = Vec3::new(0.0, later.fy * iz, -later.fy * p.y * iz * iz);
+        let increment = |d: Vec3| {
+            let rot = p.cross(&d);
+            SVector::<f64, 6>::new(d.x, d.y, d.z, rot.x, rot.y, rot.z)
+        };
+        let photometric = increment(du * gx + dv * gy);
+        let depth = (z > 0.0)
+            .then(|| {
+                let (u, v) = (libm::round(x) as usize, libm::round(y) as usize);
+                let (l, r) = (later.depth[later.at(u - 1, v)], later.depth[later.at(u + 1, v)]);
+                let (a, b) = (later.depth[later.at(u, v - 1)], later.depth[later.at(u, v + 1)]);
+                (l > 0.0 && r > 0.0 && a > 0.0 && b > 0.0).then(|| {
+                    let (zx, zy) = (0.5 * (r - l) as f64, 0.5 * (b - a) as f64);
+                    (
+                        z - p.z,
+                        increment(du * zx + dv * zy - Vec3::new(0.0, 0.0, 1.0)),
+                    )
+                })
+            })
+            .flatten();
+        Some((grey - t.grey, photometric, depth))
+    }
+}
+
+/// Robust deviations of the brightness and depth residuals.
+fn spreads(rows: &Rows) -> (f64, f64) {
+    let mut b: Vec<f64> = rows.iter().flatten().map(|r| r.0).collect();
+    let mut d: Vec<f64> = rows.iter().flatten().filter_map(|r| r.2.map(|d| d.0)).collect();
+    (
+        (MAD_TO_SIGMA * median_abs(&mut b)).max(MIN_BRIGHTNESS_SIGMA),
+        (MAD_TO_SIGMA * median_abs(&mut d)).max(MIN_DEPTH_SIGMA),
+    )
+}
+
+/// The robust loss of a row at deviations `(sb, sd)`.
+fn loss((rb, _, d): &Row, (sb, sd): (f64, f64)) -> f64 {
+    cauchy_loss(rb / sb) + d.map_or(0.0, |(rd, _)| cauchy_loss(rd / sd))
+}
+
+/// One Gauss-Newton update of `motion`, or `None` when the normal
+/// equations cannot be solved.
+fn update(rows: &Rows, (sb, sd): (f64, f64)) -> Option<SVector<f64, 6>> {
+    let mut a = SMatrix::<f64, 6, 6>::zeros();
+    let mut g = SVector::<f64, 6>::zeros();
+    let mut add = |r: f64, j: &SVector<f64, 6>, s: f64| {
+        let (r, j) = (r / s, j / s);
+        let w = cauchy_weight(r);
+        a += j * j.transpose() * w;
+        g += j * (r * w);
+    };
+    for (rb, jb, d) in rows.iter().flatten() {
+        add(*rb, jb, sb);
+        if let Some((rd, jd)) = d {
+            add(*rd, jd, sd);
+        }
+    }
+    let scale = a.trace() / 6.0;
+    if !(scale > 0.0) {
+        return None;
+    }
+    a += SMatrix::<f64, 6, 6>::identity() * (RIDGE * scale);
+    let x = -a.cholesky()?.solve(&g);
+    x.iter().all(|v| v.is_finite()).then_some(x)
+}
+
+/// The camera's estimated motion between two frames.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CameraMotion {
+    /// Where a point at rest goes, from the earlier camera frame to the later.
+    pub motion: RigidMotion,
+    /// Background pixels it was judged on at the finest level.
+    pub points: usize,
+    /// How much better than no motion it explains them (the robust loss's
+    /// drop, twice, in units of the residuals' variance; a chi-square of six
+    /// degrees of freedom under no motion).
+    pub gain: f64,
+}
+
+/// The motion of the camera from `earlier` to `later` (two views of the
+/// same camera), or `None` when the background says too little (fewer
+/// than [`MIN_POINTS`] textured background pixels with depth, a failed
+/// solve) or no motion is significant.
+pub fn camera_motion(earlier: &BackgroundView, later: &BackgroundView) -> Option<CameraMotion> {
+    if earlier.levels.len() != later.levels.len() {
+        return None;
+    }
+    let mut motion = RigidMotion::identity();
+    let mut finest = None;
+    for (e, l) in earlier.levels.iter().zip(&later.levels).rev() {
+        if e.width != l.width || e.height != l.height {
+            return None;
+        }
+        let templates = templates(e);
+        for _ in 0..MAX_ITERATIONS {
+            let rows = residuals(&templates, l, &motion);
+            if rows.iter().flatten().count() < MIN_POINTS {
+                break;
+            }
+            let Some(x) = update(&rows, spreads(&rows)) else {
+                break;
+            };
+            let (v, w) = (Vec3::new(x[0], x[1], x[2]), Vec3::new(x[3], x[4], x[5]));
+            let turn: Matrix3<f64> = rotation_of(&w);
+            motion = RigidMotion {
+                rotation: turn * motion.rotation,
+                translation: turn * motion.translation + v,
+            };
+            if v.norm() < CONVERGED && w.norm() < CONVERGED {
+                break;
+            }
+        }
+        finest = Some(templates);
+    }
+    let templates = finest?;
+    let moved = residuals(&templates, &later.levels[0], &motion);
+    let still = residuals(&templates, &later.levels[0], &RigidMotion::identity());
+    // Judged on the pixels both follow, at the motion's deviations.
+    let s = spreads(&moved);
+    let (mut points, mut gain, mut shift, mut better) = (0, 0.0, 0.0, 0);
+    let finest = &later.levels[0];
+    for ((m, n), t) in moved.iter().zip(&still).zip(&templates) {
+        if let (Some(m), Some(n)) = (m, n) {
+            points += 1;
+            let drop = loss(n, s) - loss(m, s);
+            gain += 2.0 * drop;
+            better += usize::from(drop > 0.0);
+            let (p, q) = (t.point, motion.apply(&t.point));
+            let du = finest.fx * (q.x / q.z - p.x / p.z);
+            let dv = finest.fy * (q.y / q.z - p.y / p.z);
+            shift += libm::sqrt(du * du + dv * dv);
+        }
+    }
+    let resolved = points > 0 && shift / points as f64 >= MIN_RESOLVED_SHIFT;
+    let shared = better as f64 > WHOLE_BACKGROUND_SHARE * points as f64;
+    let taken = points >= MIN_POINTS
+        && resolved
+        && shared
+        && gain > SIGNIFICANCE
+        && motion.is_finite();
+    taken.then_some(CameraMotion {
+        motion,
+        points,
+        gain,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::SplitMix64;
+
+    const CAMERA: CameraIntrinsics = CameraIntrinsics {
+        width: 320,
+        height: 240,
+        fx: 300.0,
+        fy: 300.0,
+        cx: 160.0,
+        cy: 120.0,
+    };
+
+    /// A table's brightness at world `(x, y)` (metres): value noise (a
+    /// hashed lattice, interpolated) at 4 cm and 1 cm, or plain grey.
+    fn table(x: f64, y: f64, textured: bool) -> f64 {
+        if !textured {
+            return 128.0;
+        }
+        let lattice = |x: f64, y: f64, cell: f64| {
+            let (gx, gy) = (libm::floor(x / cell), libm::floor(y / cell));
+            let (a, b) = (x / cell - gx, y / cell - gy);
+            let at = |i: f64, j: f64| {
+                let mut h = SplitMix64::new(((i as i64) * 73_856_093 ^ (j as i64) * 19_349_663) as u64);
+                h.uniform()
+            };
+            let (s, t) = (a * a * (3.0 - 2.0 * a), b * b * (3.0 - 2.0 * b));
+            let top = at(gx, gy) * (1.0 - s) + at(gx + 1.0, gy) * s;
+            let bottom = at(gx, gy + 1.0) * (1.0 - s) + at(gx + 1.0, gy + 1.0) * s;
+            top * (1.0 - t) + bottom * t
+        };
+        60.0 + 100.0 * lattice(x, y, 0.04) + 60.0 * lattice(x, y, 0.01)
+    }
+
+    /// Colour and depth of the table plane `z = 0` seen from a camera at
+    /// `centre` looking down, turned by `turn` (a rotation vector), with
+    /// `noise` grey levels of noise; `stripe` (pixel columns) painted as a
+    /// moving thing of its own, shifted by `stripe_shift` pixels.
+    fn view(
+        centre: Vec3,
+        turn: Vec3,
+        textured: bool,
+        noise: f64,
+        seed: u64,
+        stripe: Option<(usize, usize, f64)>,
+    ) -> (Vec<u8>, Vec<u16>) {
+        // Camera axes in the world: x right, y down (world -y), z down.
+        let base = Matrix3::new(1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, -1.0);
+        let rows = rotation_of(&turn) * base;
+        let mut rng = SplitMix64::new(seed);
+        let (w, h) = (CAMERA.width as usize, CAMERA.height as usize);
+        let (mut rgb, mut depth) = (vec![0u8; w * h * 3], vec![0u16; w * h]);
+        for v in 0..h {
+            for u in 0..w {
+                let ray = Vec3::new(
+                    (u as f64 - CAMERA.cx) / CAMERA.fx,
+                    (v as f64 - CAMERA.cy) / CAMERA.fy,
+                    1.0,
+                );
+                let world_ray = rows.transpose() * ray;
+                let t = -centre.z / world_ray.z;
+                let hit = centre + world_ray * t;
+                let mut g = table(hit.x, hit.y, textured);
+                if let Some((u0, u1, shift)) = stripe {
+                    if u >= u0 && u < u1 {
+                        g = 128.0 + 100.0 * libm::sin(0.7 * (v as f64 + shift));
+                    }
+                }
+                g += noise * rng.normal();
+                let g = g.clamp(0.0, 255.0) as u8;
+                rgb[3 * (v * w + u)..3 * (v * w + u) + 3].copy_from_slice(&[g, g, g]);
+                depth[v * w + u] = libm::round(t * 1000.0) as u16;
+            }
+        }
+        (rgb, depth)
+    }
+
+    fn background(images: &(Vec<u8>, Vec<u16>), rope: &Mask) -> BackgroundView {
+        let frame = Frame::new(CAMERA.width, CAMERA.height, &images.0, &images.1, 0.001)
+            .expect("frame");
+        BackgroundView::new(&frame, &CAMERA, rope, &[], (0.1, 3.0))
+    }
+
+    fn no_rope() -> Mask {
+        Mask::new(CAMERA.width, CAMERA.height)
+    }
+
+    const HOME: Vec3 = Vec3::new(0.0, 0.0, 0.8);
+
+    #[test]
+    fn a_camera_that_moved_is_followed_to_a_fraction_of_its_move() {
+        // About the most an arm or a hand moves a camera in a 30th of a second.
+        let (to, turn) = (Vec3::new(0.006, -0.004, 0.795), Vec3::new(0.004, -0.005, 0.008));
+        let a = background(&view(HOME, Vec3::zeros(), true, 2.0, 1, None), &no_rope());
+        let b = background(&view(to, turn, true, 2.0, 2, None), &no_rope());
+        let found = camera_motion(&a, &b).expect("a significant motion");
+        let base = Matrix3::new(1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, -1.0);
+        let truth =
+            RigidMotion::between_camera_poses(&base, &HOME, &(rotation_of(&turn) * base), &to);
+        // A point on the table straight below, where a rope would lie.
+        let p = Vec3::new(0.0, 0.0, 0.8);
+        let moved = (truth.apply(&p) - p).norm();
+        let error = (found.motion.apply(&p) - truth.apply(&p)).norm();
+        assert!(moved > 0.008, "{moved}");
+        assert!(error < 0.03 * moved, "{error} of {moved}");
+    }
+
+    #[test]
+    fn a_still_camera_reads_still_through_image_noise() {
+        let a = background(&view(HOME, Vec3::zeros(), true, 2.0, 1, None), &no_rope());
+        let b = background(&view(HOME, Vec3::zeros(), true, 2.0, 2, None), &no_rope());
+        assert_eq!(camera_motion(&a, &b), None);
+    }
+
+    #[test]
+    fn a_plain_table_does_not_invent_a_slide_in_its_plane() {
+        let to = Vec3::new(0.01, 0.005, 0.8);
+        let a = background(&view(HOME, Vec3::zeros(), false, 1.0, 1, None), &no_rope());
+        let b = background(&view(to, Vec3::zeros(), false, 1.0, 2, None), &no_rope());
+        if let Some(m) = camera_motion(&a, &b) {
+            let p = Vec3::new(0.0, 0.0, 0.8);
+            assert!((m.motion.apply(&p) - p).norm() < 0.001, "{m:?}");
+        }
+    }
+
+    #[test]
+    fn the_rope_moving_alone_is_not_the_camera() {
+        // A third of the image is a strongly textured thing that moves; the
+        // mask says it is the rope.
+        let mut rope = no_rope();
+        for v in 0..CAMERA.height as usize {
+            for u in 100..200 {
+                rope.data[v * CAMERA.width as usize + u] = true;
+            }
+        }
+        let stripe = |shift| Some((100, 200, shift));
+        let a = background(&view(HOME, Vec3::zeros(), true, 2.0, 1, stripe(0.0)), &rope);
+        let b = background(&view(HOME, Vec3::zeros(), true, 2.0, 2, stripe(3.0)), &rope);
+        assert_eq!(camera_motion(&a, &b), None);
+    }
+
+    #[test]
+    fn too_little_background_gives_no_motion() {
+        let mut rope = no_rope();
+        rope.data.iter_mut().for_each(|m| *m = true);
+        let a = background(&view(HOME, Vec3::zeros(), true, 2.0, 1, None), &rope);
+        let b = background(&view(Vec3::new(0.01, 0.0, 0.8), Vec3::zeros(), true, 2.0, 2, None), &rope);
+        assert_eq!(camera_motion(&a, &b), None);
+    }
+}
