@@ -50,7 +50,8 @@ impl RigidMotion {
 
     /// `true` when every entry is finite.
     pub fn is_finite(&self) -> bool {
-        self.rotation.iter().all(|v| v.is_finite()) && self.translation.iter().all(|v| v.is_finite())
+        self.rotation.iter().all(|v| v.is_finite())
+            && self.translation.iter().all(|v| v.is_finite())
     }
 }
 
@@ -64,7 +65,6 @@ pub fn rotation_of(omega: &Vec3) -> Matrix3<f64> {
     let kx = Matrix3::new(0.0, -k.z, k.y, k.z, 0.0, -k.x, -k.y, k.x, 0.0);
     Matrix3::identity() + kx * libm::sin(angle) + kx * kx * (1.0 - libm::cos(angle))
 }
-
 
 #[cfg(test)]
 mod tests {

@@ -73,7 +73,11 @@ pub struct Params {
     /// neither rope nor declared occluder) and move the tracked rope with
     /// it before each step, so that a rope at rest stays at rest in the
     /// world when the camera is on an arm or in a hand. Shared by every
-    /// algorithm. Default true.
+    /// algorithm. Default false: on the randomised tuning range it follows
+    /// a moving camera but a box sliding over much of the table can pass
+    /// for one, and it costs about 0.6 ms a frame at 640x480 (see
+    /// `docs/algorithm-notes.md`, "The camera's own motion").
+    /// [`crate::Tracker::move_camera`] takes a known motion instead.
     pub follow_camera: bool,
     /// UPETrack's registration and occlusion-estimate parameters (in a
     /// file: at the top level).
@@ -110,7 +114,7 @@ impl Default for Params {
             min_blob_pixels: 150,
             reinit_length_fraction: 0.8,
             reinit_visible_fraction: 0.5,
-            follow_camera: true,
+            follow_camera: false,
             upetrack: UpeTrackParams::default(),
             algorithm: Algorithm::Upetrack,
             cpd: CpdSettings::default(),

@@ -19,14 +19,14 @@ use crate::perception::frame::Frame;
 use crate::perception::segmentation::{Mask, Rect};
 
 /// Width, pixels, the finest level is box-averaged down to (at most): the
-/// motion of a background a metre away is then found to a fraction of a
-/// full-resolution pixel at a tenth of the cost of the full image.
-pub const FINEST_WIDTH: u32 = 320;
+/// motion of a background a metre away is then found to a few tenths of a
+/// millimetre at a small share of the cost of the full image.
+pub const FINEST_WIDTH: u32 = 160;
 /// Width, pixels, at which halving stops: the coarsest level still has a
 /// few hundred textured pixels and catches a move of several pixels.
-pub const COARSEST_WIDTH: u32 = 80;
+pub const COARSEST_WIDTH: u32 = 40;
 /// Most background pixels followed per level (one per grid cell).
-pub const MAX_POINTS: usize = 1500;
+pub const MAX_POINTS: usize = 800;
 /// Fewest background pixels (with texture and depth) a motion is
 /// estimated from at the finest level; six unknowns need many more.
 pub const MIN_POINTS: usize = 60;
@@ -47,8 +47,9 @@ pub const GRADIENT_NOISE_SCALES: f64 = 4.29;
 pub const MIN_RESOLVED_SHIFT: f64 = 0.1;
 /// Gauss-Newton iterations per level, at most.
 const MAX_ITERATIONS: usize = 12;
-/// An update smaller than this (metres, radians) ends a level's iterations.
-const CONVERGED: f64 = 1e-6;
+/// An update moving the background by less than this (pixels of the
+/// level) ends the level's iterations.
+const CONVERGED_PX: f64 = 0.01;
 /// The Cauchy loss's scale in robust standard deviations of the residuals
 /// (95 % efficiency on Gaussian noise). A redescending loss: a box or a
 /// hand moving over the table weighs next to nothing once the still
@@ -88,6 +89,10 @@ struct Level {
     depth: Vec<f32>,
     /// Background: not the rope, not a declared occluder.
     background: Vec<bool>,
+    /// Brightness gradient along x and y (central differences; 0 on the
+    /// border).
+    gx: Vec<f32>,
+    gy: Vec<f32>,
     fx: f64,
     fy: f64,
     cx: f64,
@@ -99,13 +104,19 @@ impl Level {
         v * self.width + u
     }
 
-    /// Central-difference brightness gradient at an inner pixel.
-    fn gradient(&self, u: usize, v: usize) -> (f32, f32) {
-        let i = self.at(u, v);
-        (
-            0.5 * (self.grey[i + 1] - self.grey[i - 1]),
-            0.5 * (self.grey[i + self.width] - self.grey[i - self.width]),
-        )
+    /// Fills the gradient images from the brightness.
+    fn with_gradients(mut self) -> Self {
+        let w = self.width;
+        self.gx = vec![0.0; self.grey.len()];
+        self.gy = vec![0.0; self.grey.len()];
+        for v in 1..self.height.saturating_sub(1) {
+            for u in 1..w - 1 {
+                let i = v * w + u;
+                self.gx[i] = 0.5 * (self.grey[i + 1] - self.grey[i - 1]);
+                self.gy[i] = 0.5 * (self.grey[i + w] - self.grey[i - w]);
+            }
+        }
+        self
     }
 
     /// The level below, halved by 2x2 averages.
@@ -134,11 +145,14 @@ impl Level {
             grey,
             depth,
             background,
+            gx: Vec::new(),
+            gy: Vec::new(),
             fx: 0.5 * self.fx,
             fy: 0.5 * self.fy,
             cx: 0.5 * (self.cx + 0.5) - 0.5,
             cy: 0.5 * (self.cy + 0.5) - 0.5,
         }
+        .with_gradients()
     }
 }
 
@@ -169,6 +183,8 @@ fn agreed_depth(depths: impl Iterator<Item = f32>) -> f32 {
 #[derive(Debug, Clone)]
 pub struct BackgroundView {
     levels: Vec<Level>,
+    /// Brightness noise of the finest level, grey levels.
+    noise: f64,
 }
 
 impl BackgroundView {
@@ -192,32 +208,31 @@ impl BackgroundView {
         let scale = frame.depth_scale as f32;
         let mut grey = vec![0.0f32; w * h];
         let mut depth = vec![0.0f32; w * h];
-        let inv = 1.0 / (s * s) as f32;
+        // Each block is read at its centre's 2x2 pixels (the whole block
+        // when it is one pixel): a quarter of the noise of one pixel for a
+        // small share of the image's bytes.
+        let (off, n) = if s >= 2 { (s / 2 - 1, 2) } else { (0, 1) };
+        let inv = 1.0 / (4 * n * n) as f32;
         for v in 0..h {
             for u in 0..w {
                 let (mut g, mut masked) = (0u32, false);
-                for y in v * s..(v + 1) * s {
-                    let row = y * fw;
-                    for x in u * s..(u + 1) * s {
-                        let c = &frame.color[3 * (row + x)..3 * (row + x) + 3];
+                let mut zs = [0.0f32; 4];
+                for dy in 0..n {
+                    let row = (v * s + off + dy) * fw;
+                    for dx in 0..n {
+                        let i = row + u * s + off + dx;
+                        let c = &frame.color[3 * i..3 * i + 3];
                         // Luma close enough, in integers: (R + 2G + B) / 4.
                         g += c[0] as u32 + 2 * c[1] as u32 + c[2] as u32;
-                        masked |= rope_fits && rope.data[row + x];
+                        masked |= rope_fits && rope.data[i];
+                        let z = frame.depth[i] as f32 * scale;
+                        zs[dy * n + dx] = if z >= zmin && z <= zmax { z } else { 0.0 };
                     }
                 }
                 let o = v * w + u;
-                grey[o] = 0.25 * g as f32 * inv;
+                grey[o] = g as f32 * inv;
                 excluded[o] = masked;
-                depth[o] = agreed_depth((v * s..(v + 1) * s).flat_map(|y| {
-                    (u * s..(u + 1) * s).map(move |x| {
-                        let z = frame.depth[y * fw + x] as f32 * scale;
-                        if z >= zmin && z <= zmax {
-                            z
-                        } else {
-                            0.0
-                        }
-                    })
-                }));
+                depth[o] = agreed_depth(zs[..n * n].iter().copied());
             }
         }
         // The rope's edge and shadow move with it: one pixel round the mask.
@@ -249,11 +264,14 @@ impl BackgroundView {
             grey,
             depth,
             background,
+            gx: Vec::new(),
+            gy: Vec::new(),
             fx: camera.fx / sf,
             fy: camera.fy / sf,
             cx: (camera.cx + 0.5) / sf - 0.5,
             cy: (camera.cy + 0.5) / sf - 0.5,
-        }];
+        }
+        .with_gradients()];
         while let Some(last) = levels.last() {
             if last.width as u32 <= COARSEST_WIDTH || last.height < 16 {
                 break;
@@ -261,7 +279,8 @@ impl BackgroundView {
             let next = last.halved();
             levels.push(next);
         }
-        Self { levels }
+        let noise = noise(&levels[0]);
+        Self { levels, noise }
     }
 }
 
@@ -275,8 +294,10 @@ struct Template {
 
 /// The textured background pixels of `level`: in each cell of a grid, the
 /// one with the strongest gradient above [`GRADIENT_FLOOR`] and a depth.
-fn templates(level: &Level) -> Vec<Template> {
-    let floor = GRADIENT_FLOOR.max((GRADIENT_NOISE_SCALES * noise(level) / core::f64::consts::SQRT_2) as f32);
+/// `noise` is the level's brightness noise.
+fn templates(level: &Level, noise: f64) -> Vec<Template> {
+    let floor =
+        GRADIENT_FLOOR.max((GRADIENT_NOISE_SCALES * noise / core::f64::consts::SQRT_2) as f32);
     let area = level.width * level.height;
     let cell = (libm::ceil(libm::sqrt(area as f64 / MAX_POINTS as f64)) as usize).max(1);
     let mut out = Vec::new();
@@ -289,7 +310,7 @@ fn templates(level: &Level) -> Vec<Template> {
                     if !level.background[i] || !(level.depth[i] > 0.0) {
                         continue;
                     }
-                    let (gx, gy) = level.gradient(u, v);
+                    let (gx, gy) = (level.gx[i], level.gy[i]);
                     let g = libm::sqrtf(gx * gx + gy * gy);
                     if g >= floor && best.is_none_or(|b| g > b.0) {
                         best = Some((g, u, v));
@@ -352,8 +373,8 @@ fn sample(level: &Level, x: f64, y: f64) -> Option<(f64, f64, f64, f64)> {
         (top * (1.0 - b) + bottom * b) as f64
     };
     let grey = lerp(&|u, v| level.grey[level.at(u, v)]);
-    let gx = lerp(&|u, v| level.gradient(u, v).0);
-    let gy = lerp(&|u, v| level.gradient(u, v).1);
+    let gx = lerp(&|u, v| level.gx[level.at(u, v)]);
+    let gy = lerp(&|u, v| level.gy[level.at(u, v)]);
     Some((grey, gx, gy, level.depth[near] as f64))
 }
 
@@ -421,8 +442,14 @@ fn residual(t: &Template, later: &Level, motion: &RigidMotion) -> Option<Row> {
         let depth = (z > 0.0)
             .then(|| {
                 let (u, v) = (libm::round(x) as usize, libm::round(y) as usize);
-                let (l, r) = (later.depth[later.at(u - 1, v)], later.depth[later.at(u + 1, v)]);
-                let (a, b) = (later.depth[later.at(u, v - 1)], later.depth[later.at(u, v + 1)]);
+                let (l, r) = (
+                    later.depth[later.at(u - 1, v)],
+                    later.depth[later.at(u + 1, v)],
+                );
+                let (a, b) = (
+                    later.depth[later.at(u, v - 1)],
+                    later.depth[later.at(u, v + 1)],
+                );
                 (l > 0.0 && r > 0.0 && a > 0.0 && b > 0.0).then(|| {
                     let (zx, zy) = (0.5 * (r - l) as f64, 0.5 * (b - a) as f64);
                     (
@@ -439,7 +466,11 @@ fn residual(t: &Template, later: &Level, motion: &RigidMotion) -> Option<Row> {
 /// Robust deviations of the brightness and depth residuals.
 fn spreads(rows: &Rows) -> (f64, f64) {
     let mut b: Vec<f64> = rows.iter().flatten().map(|r| r.0).collect();
-    let mut d: Vec<f64> = rows.iter().flatten().filter_map(|r| r.2.map(|d| d.0)).collect();
+    let mut d: Vec<f64> = rows
+        .iter()
+        .flatten()
+        .filter_map(|r| r.2.map(|d| d.0))
+        .collect();
     (
         (MAD_TO_SIGMA * median_abs(&mut b)).max(MIN_BRIGHTNESS_SIGMA),
         (MAD_TO_SIGMA * median_abs(&mut d)).max(MIN_DEPTH_SIGMA),
@@ -500,11 +531,14 @@ pub fn camera_motion(earlier: &BackgroundView, later: &BackgroundView) -> Option
     }
     let mut motion = RigidMotion::identity();
     let mut finest = None;
-    for (e, l) in earlier.levels.iter().zip(&later.levels).rev() {
+    for (k, (e, l)) in earlier.levels.iter().zip(&later.levels).enumerate().rev() {
         if e.width != l.width || e.height != l.height {
             return None;
         }
-        let templates = templates(e);
+        // Halving averages four pixels: half the noise per level.
+        let templates = templates(e, earlier.noise / (1u32 << k) as f64);
+        let depth =
+            templates.iter().map(|t| t.point.z).sum::<f64>() / templates.len().max(1) as f64;
         for _ in 0..MAX_ITERATIONS {
             let rows = residuals(&templates, l, &motion);
             if rows.iter().flatten().count() < MIN_POINTS {
@@ -519,7 +553,7 @@ pub fn camera_motion(earlier: &BackgroundView, later: &BackgroundView) -> Option
                 rotation: turn * motion.rotation,
                 translation: turn * motion.translation + v,
             };
-            if v.norm() < CONVERGED && w.norm() < CONVERGED {
+            if l.fx * (v.norm() / depth + w.norm()) < CONVERGED_PX {
                 break;
             }
         }
@@ -546,11 +580,8 @@ pub fn camera_motion(earlier: &BackgroundView, later: &BackgroundView) -> Option
     }
     let resolved = points > 0 && shift / points as f64 >= MIN_RESOLVED_SHIFT;
     let shared = better as f64 > WHOLE_BACKGROUND_SHARE * points as f64;
-    let taken = points >= MIN_POINTS
-        && resolved
-        && shared
-        && gain > SIGNIFICANCE
-        && motion.is_finite();
+    let taken =
+        points >= MIN_POINTS && resolved && shared && gain > SIGNIFICANCE && motion.is_finite();
     taken.then_some(CameraMotion {
         motion,
         points,
@@ -582,7 +613,8 @@ mod tests {
             let (gx, gy) = (libm::floor(x / cell), libm::floor(y / cell));
             let (a, b) = (x / cell - gx, y / cell - gy);
             let at = |i: f64, j: f64| {
-                let mut h = SplitMix64::new(((i as i64) * 73_856_093 ^ (j as i64) * 19_349_663) as u64);
+                let mut h =
+                    SplitMix64::new((((i as i64) * 73_856_093) ^ ((j as i64) * 19_349_663)) as u64);
                 h.uniform()
             };
             let (s, t) = (a * a * (3.0 - 2.0 * a), b * b * (3.0 - 2.0 * b));
@@ -637,8 +669,8 @@ mod tests {
     }
 
     fn background(images: &(Vec<u8>, Vec<u16>), rope: &Mask) -> BackgroundView {
-        let frame = Frame::new(CAMERA.width, CAMERA.height, &images.0, &images.1, 0.001)
-            .expect("frame");
+        let frame =
+            Frame::new(CAMERA.width, CAMERA.height, &images.0, &images.1, 0.001).expect("frame");
         BackgroundView::new(&frame, &CAMERA, rope, &[], (0.1, 3.0))
     }
 
@@ -651,7 +683,10 @@ mod tests {
     #[test]
     fn a_camera_that_moved_is_followed_to_a_fraction_of_its_move() {
         // About the most an arm or a hand moves a camera in a 30th of a second.
-        let (to, turn) = (Vec3::new(0.006, -0.004, 0.795), Vec3::new(0.004, -0.005, 0.008));
+        let (to, turn) = (
+            Vec3::new(0.006, -0.004, 0.795),
+            Vec3::new(0.004, -0.005, 0.008),
+        );
         let a = background(&view(HOME, Vec3::zeros(), true, 2.0, 1, None), &no_rope());
         let b = background(&view(to, turn, true, 2.0, 2, None), &no_rope());
         let found = camera_motion(&a, &b).expect("a significant motion");
@@ -705,7 +740,10 @@ mod tests {
         let mut rope = no_rope();
         rope.data.iter_mut().for_each(|m| *m = true);
         let a = background(&view(HOME, Vec3::zeros(), true, 2.0, 1, None), &rope);
-        let b = background(&view(Vec3::new(0.01, 0.0, 0.8), Vec3::zeros(), true, 2.0, 2, None), &rope);
+        let b = background(
+            &view(Vec3::new(0.01, 0.0, 0.8), Vec3::zeros(), true, 2.0, 2, None),
+            &rope,
+        );
         assert_eq!(camera_motion(&a, &b), None);
     }
 }

@@ -965,6 +965,24 @@ mod tests {
     }
 
     #[test]
+    fn a_camera_motion_carries_the_state_and_a_non_finite_one_is_refused() {
+        let (mut t, nodes) = tracking_a_line(Params::default());
+        let mut bad = RigidMotion::identity();
+        bad.translation.x = f64::NAN;
+        assert!(matches!(
+            t.move_camera(&bad),
+            Err(TrackerError::CameraMotion)
+        ));
+        assert_eq!(t.nodes(), nodes.as_slice());
+        let mut shift = RigidMotion::identity();
+        shift.translation = Vec3::new(0.01, -0.02, 0.005);
+        t.move_camera(&shift).expect("a finite motion");
+        for (moved, was) in t.nodes().iter().zip(&nodes) {
+            assert_eq!(*moved, was + shift.translation);
+        }
+    }
+
+    #[test]
     fn restore_returns_to_a_snapshot_and_resamples_to_the_node_count() {
         let empty = {
             let cam = CameraIntrinsics::D435I_640X480;

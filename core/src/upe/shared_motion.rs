@@ -10,8 +10,8 @@ use alloc::vec::Vec;
 use nalgebra::{Matrix3, SMatrix, SVector};
 
 use crate::math::Vec3;
-pub use crate::motion::RigidMotion;
 use crate::motion::rotation_of;
+pub use crate::motion::RigidMotion;
 
 /// Fewest visible nodes a shared motion is estimated from: three
 /// non-collinear points fix a rotation.
