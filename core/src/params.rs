@@ -75,7 +75,7 @@ pub struct Params {
     /// world when the camera is on an arm or in a hand. Shared by every
     /// algorithm. Default false: on the randomised tuning range it follows
     /// a moving camera but a box sliding over much of the table can pass
-    /// for one, and it costs about 0.6 ms a frame at 640x480 (see
+    /// for one, and it costs 0.6-1.0 ms a frame at 640x480 (see
     /// `docs/algorithm-notes.md`, "The camera's own motion").
     /// [`crate::Tracker::move_camera`] takes a known motion instead.
     pub follow_camera: bool,
