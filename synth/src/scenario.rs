@@ -810,12 +810,8 @@ impl Scenario {
             &mut self.rng,
         );
         let pose = self.render.pose();
-        let groundtruth: Vec<Vec3> = self
-            .rope
-            .x
-            .iter()
-            .map(|p| pose.world_to_camera(p))
-            .collect();
+        let to_camera = |p: &Vec3| pose.world_to_camera(p);
+        let groundtruth: Vec<Vec3> = self.rope.x.iter().map(to_camera).collect();
         let cam = self.render.camera;
         let rects = self.occlusions_at(f);
         let occluded = self
