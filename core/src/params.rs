@@ -73,10 +73,10 @@ pub struct Params {
     /// neither rope nor declared occluder) and move the tracked rope with
     /// it before each step, so that a rope at rest stays at rest in the
     /// world when the camera is on an arm or in a hand. Shared by every
-    /// algorithm. Default false: on the randomised tuning range it follows
-    /// a moving camera but a box sliding over much of the table can pass
-    /// for one, and it costs 0.6-1.0 ms a frame at 640x480 (see
-    /// `docs/algorithm-notes.md`, "The camera's own motion").
+    /// algorithm. Default false: it helps the randomised tuning range but
+    /// hurts the report range's tail (handheld cameras far away), and it
+    /// costs 0.8-0.9 ms a frame at 640x480 (see `docs/algorithm-notes.md`,
+    /// "The camera's own motion").
     /// [`crate::Tracker::move_camera`] takes a known motion instead.
     pub follow_camera: bool,
     /// UPETrack's registration and occlusion-estimate parameters (in a

@@ -1,11 +1,14 @@
 //! The camera's own motion between two frames, from the background: a
 //! camera on a robot arm or in a hand moves everything at rest in the
 //! world, the hidden part of a rope too. Direct RGB-D odometry: the
-//! rigid motion that best carries the last frame's textured background
-//! pixels (brightness and depth) onto this frame's, coarse to fine, with
-//! the rope, the declared occluders and whatever moved on its own weighed
-//! out by a robust loss. Taken only when it explains the images
-//! significantly better than no motion, so a still camera reads still.
+//! rigid motion that best carries the last frame's background pixels on
+//! the support plane (the table; by brightness where textured, by depth
+//! everywhere) onto this frame's, coarse to fine, with the rope, the
+//! declared occluders and what stands above the table left out and
+//! whatever else moved on its own weighed out by a robust loss. Taken only
+//! when it explains the images significantly better than no motion and
+//! nearly all pixels that decide side with it, so a still camera reads
+//! still.
 
 use alloc::vec;
 use alloc::vec::Vec;
@@ -45,6 +48,14 @@ pub const GRADIENT_NOISE_SCALES: f64 = 4.29;
 /// which a sub-pixel fit of a still camera would otherwise take for a
 /// significant gain.
 pub const MIN_RESOLVED_SHIFT: f64 = 0.1;
+/// A background pixel lies on the support plane (the table) when it is
+/// within this many deviations of depth noise of it.
+pub const PLANE_SIGMAS: f64 = 3.0;
+/// Random three-point trials of the support plane's search (seeded: the
+/// same plane on every run and target).
+const PLANE_TRIALS: usize = 64;
+/// Points a trial plane is scored on, at most.
+const PLANE_SCORED_POINTS: usize = 200;
 /// Gauss-Newton iterations per level, at most.
 const MAX_ITERATIONS: usize = 12;
 /// An update moving the background by less than this (pixels of the
@@ -55,10 +66,20 @@ const CONVERGED_PX: f64 = 0.01;
 /// hand moving over the table weighs next to nothing once the still
 /// background is matched, where Huber's would still pull.
 const CAUCHY: f64 = 2.385;
-/// Share of the compared background pixels the motion must explain better
-/// than no motion: the camera moves all of the background, a box or a hand
-/// only its part.
-const WHOLE_BACKGROUND_SHARE: f64 = 0.5;
+/// Share of the decisive background pixels (those a motion explains
+/// clearly better or clearly worse than no motion) it must explain better:
+/// the camera moves all of the background, so nearly every pixel that
+/// tells a move from stillness sides with it; a box, a hand or a shadow
+/// moving on its own is a part that speaks for it while the still rest
+/// speaks against. (The same share as the visible rope's shared motion.)
+const WHOLE_BACKGROUND_SHARE: f64 = 0.9;
+/// Fewest decisive pixels the share is judged on: ten votes all one way
+/// happen by chance about once in a thousand (`2^-10`).
+const MIN_DECISIVE: usize = 10;
+/// A pixel is decisive when its own loss changes by more than the
+/// chi-square of one degree of freedom at 0.95 (in units of the
+/// residuals' variance, twice the loss).
+const DECISIVE: f64 = 3.84;
 /// The median absolute residual times this is the standard deviation of
 /// Gaussian residuals.
 const MAD_TO_SIGMA: f64 = 1.4826;
@@ -102,6 +123,18 @@ struct Level {
 impl Level {
     fn at(&self, u: usize, v: usize) -> usize {
         v * self.width + u
+    }
+
+    /// Pixel `(u, v)` in 3D, metres, where its depth is known.
+    fn point(&self, u: usize, v: usize) -> Option<Vec3> {
+        let z = self.depth[self.at(u, v)] as f64;
+        (z > 0.0).then(|| {
+            Vec3::new(
+                (u as f64 - self.cx) * z / self.fx,
+                (v as f64 - self.cy) * z / self.fy,
+                z,
+            )
+        })
     }
 
     /// Fills the gradient images from the brightness.
@@ -185,6 +218,8 @@ pub struct BackgroundView {
     levels: Vec<Level>,
     /// Brightness noise of the finest level, grey levels.
     noise: f64,
+    /// The full image's focal length, pixels (for the depth noise).
+    focal: f64,
 }
 
 impl BackgroundView {
@@ -208,31 +243,36 @@ impl BackgroundView {
         let scale = frame.depth_scale as f32;
         let mut grey = vec![0.0f32; w * h];
         let mut depth = vec![0.0f32; w * h];
-        // Each block is read at its centre's 2x2 pixels (the whole block
-        // when it is one pixel): a quarter of the noise of one pixel for a
-        // small share of the image's bytes.
-        let (off, n) = if s >= 2 { (s / 2 - 1, 2) } else { (0, 1) };
-        let inv = 1.0 / (4 * n * n) as f32;
+        // Each block is read at its centre's 2x2 pixels (one pixel four
+        // times when the block is one pixel): a quarter of the noise of one
+        // pixel for a small share of the image's bytes.
+        let (off, step) = if s >= 2 { (s / 2 - 1, 1) } else { (0, 0) };
+        let reading = |z: u16| {
+            let z = z as f32 * scale;
+            if z >= zmin && z <= zmax {
+                z
+            } else {
+                0.0
+            }
+        };
         for v in 0..h {
+            let top = (v * s + off) * fw;
+            let bottom = top + step * fw;
             for u in 0..w {
-                let (mut g, mut masked) = (0u32, false);
-                let mut zs = [0.0f32; 4];
-                for dy in 0..n {
-                    let row = (v * s + off + dy) * fw;
-                    for dx in 0..n {
-                        let i = row + u * s + off + dx;
-                        let c = &frame.color[3 * i..3 * i + 3];
-                        // Luma close enough, in integers: (R + 2G + B) / 4.
-                        g += c[0] as u32 + 2 * c[1] as u32 + c[2] as u32;
-                        masked |= rope_fits && rope.data[i];
-                        let z = frame.depth[i] as f32 * scale;
-                        zs[dy * n + dx] = if z >= zmin && z <= zmax { z } else { 0.0 };
-                    }
+                let x = u * s + off;
+                let ids = [top + x, top + x + step, bottom + x, bottom + x + step];
+                let mut g = 0u32;
+                let mut masked = false;
+                for &i in &ids {
+                    let c = &frame.color[3 * i..3 * i + 3];
+                    // Luma close enough, in integers: (R + 2G + B) / 4.
+                    g += c[0] as u32 + 2 * c[1] as u32 + c[2] as u32;
+                    masked |= rope_fits && rope.data[i];
                 }
                 let o = v * w + u;
-                grey[o] = g as f32 * inv;
+                grey[o] = g as f32 * (1.0 / 16.0);
                 excluded[o] = masked;
-                depth[o] = agreed_depth(zs[..n * n].iter().copied());
+                depth[o] = agreed_depth(ids.iter().map(|&i| reading(frame.depth[i])));
             }
         }
         // The rope's edge and shadow move with it: one pixel round the mask.
@@ -280,7 +320,11 @@ impl BackgroundView {
             levels.push(next);
         }
         let noise = noise(&levels[0]);
-        Self { levels, noise }
+        Self {
+            levels,
+            noise,
+            focal: camera.fx.max(camera.fy),
+        }
     }
 }
 
@@ -288,14 +332,24 @@ impl BackgroundView {
 struct Template {
     /// Where it is, metres, the earlier camera's frame.
     point: Vec3,
-    /// Its brightness.
-    grey: f64,
+    /// Its brightness, where it is textured enough to follow by it.
+    grey: Option<f64>,
 }
 
-/// The textured background pixels of `level`: in each cell of a grid, the
-/// one with the strongest gradient above [`GRADIENT_FLOOR`] and a depth.
+/// The background pixels of `level` with a depth, one in each cell of a
+/// grid: the one with the strongest gradient above [`GRADIENT_FLOOR`],
+/// followed by brightness and depth, else the cell's first, followed by
+/// depth alone. Every part of the background speaks: a plain table by its
+/// plane, so that a textured hand moving over it is outvoted.
 /// `noise` is the level's brightness noise.
-fn templates(level: &Level, noise: f64) -> Vec<Template> {
+/// With a `plane` (and the focal length for its tolerance), only pixels on
+/// it count, and a textured one only when the four neighbours its gradient
+/// is taken from are on it too: the edge of a box standing on the table is
+/// the box's texture, not the table's.
+fn templates(level: &Level, noise: f64, plane: Option<(&Plane, f64)>) -> Vec<Template> {
+    let on = |u: usize, v: usize| {
+        plane.is_none_or(|(plane, focal)| level.point(u, v).is_some_and(|p| plane.holds(&p, focal)))
+    };
     let floor =
         GRADIENT_FLOOR.max((GRADIENT_NOISE_SCALES * noise / core::f64::consts::SQRT_2) as f32);
     let area = level.width * level.height;
@@ -304,6 +358,7 @@ fn templates(level: &Level, noise: f64) -> Vec<Template> {
     for cv in (1..level.height - 1).step_by(cell) {
         for cu in (1..level.width - 1).step_by(cell) {
             let mut best: Option<(f32, usize, usize)> = None;
+            let mut plain = None;
             for v in cv..(cv + cell).min(level.height - 1) {
                 for u in cu..(cu + cell).min(level.width - 1) {
                     let i = level.at(u, v);
@@ -312,26 +367,97 @@ fn templates(level: &Level, noise: f64) -> Vec<Template> {
                     }
                     let (gx, gy) = (level.gx[i], level.gy[i]);
                     let g = libm::sqrtf(gx * gx + gy * gy);
-                    if g >= floor && best.is_none_or(|b| g > b.0) {
-                        best = Some((g, u, v));
+                    let better = g >= floor && best.is_none_or(|b| g > b.0);
+                    if (plain.is_none() || better) && on(u, v) {
+                        plain = plain.or(Some((u, v)));
+                        let stencil = [(u - 1, v), (u + 1, v), (u, v - 1), (u, v + 1)];
+                        if better && stencil.iter().all(|&(x, y)| on(x, y)) {
+                            best = Some((g, u, v));
+                        }
                     }
                 }
             }
-            if let Some((_, u, v)) = best {
-                let i = level.at(u, v);
-                let z = level.depth[i] as f64;
-                out.push(Template {
-                    point: Vec3::new(
-                        (u as f64 - level.cx) * z / level.fx,
-                        (v as f64 - level.cy) * z / level.fy,
-                        z,
-                    ),
-                    grey: level.grey[i] as f64,
-                });
+            let chosen = best.map(|(_, u, v)| (u, v, true));
+            if let Some((u, v, textured)) = chosen.or(plain.map(|(u, v)| (u, v, false))) {
+                if let Some(point) = level.point(u, v) {
+                    out.push(Template {
+                        point,
+                        grey: textured.then_some(level.grey[level.at(u, v)] as f64),
+                    });
+                }
             }
         }
     }
     out
+}
+
+/// A plane `n . p = d` (`n` a unit normal).
+#[derive(Debug, Clone, Copy)]
+struct Plane {
+    normal: Vec3,
+    offset: f64,
+}
+
+impl Plane {
+    fn through(a: &Vec3, b: &Vec3, c: &Vec3) -> Option<Self> {
+        let n = (b - a).cross(&(c - a));
+        let len = n.norm();
+        (len > 1e-9).then(|| {
+            let normal = n / len;
+            Self {
+                normal,
+                offset: normal.dot(a),
+            }
+        })
+    }
+
+    fn distance(&self, p: &Vec3) -> f64 {
+        (self.normal.dot(p) - self.offset).abs()
+    }
+
+    /// How far from a plane `p` may lie and still be on it.
+    fn tolerance(p: &Vec3, focal: f64) -> f64 {
+        PLANE_SIGMAS * crate::perception::camera::depth_noise(p.z, focal).max(MIN_DEPTH_SIGMA)
+    }
+
+    fn holds(&self, p: &Vec3, focal: f64) -> bool {
+        self.distance(p) <= Self::tolerance(p, focal)
+    }
+}
+
+/// The plane most of `points` lie on (within [`PLANE_SIGMAS`] deviations of
+/// depth noise): the surface the rope rests on. Hands, boxes, a gripper
+/// and the rope move above it; the camera moves it all.
+fn support_plane(points: &[Vec3], focal: f64) -> Option<Plane> {
+    if points.len() < 3 {
+        return None;
+    }
+    // Trials are scored on an even subset; a plane holding most points
+    // holds most of any even share of them.
+    let stride = points.len().div_ceil(PLANE_SCORED_POINTS);
+    let scored: Vec<(Vec3, f64)> = points
+        .iter()
+        .step_by(stride)
+        .map(|p| (*p, Plane::tolerance(p, focal)))
+        .collect();
+    let mut rng = crate::rng::SplitMix64::new(0x7AB1E);
+    let mut best: Option<(usize, Plane)> = None;
+    let n = points.len() as u64;
+    for _ in 0..PLANE_TRIALS {
+        let mut pick = || points[rng.below(n) as usize];
+        let (a, b, c) = (pick(), pick(), pick());
+        let Some(plane) = Plane::through(&a, &b, &c) else {
+            continue;
+        };
+        let count = scored
+            .iter()
+            .filter(|(p, tol)| plane.distance(p) <= *tol)
+            .count();
+        if best.is_none_or(|(k, _)| count > k) {
+            best = Some((count, plane));
+        }
+    }
+    best.map(|(_, plane)| plane)
 }
 
 /// The brightness noise of `level`'s background, grey levels: the robust
@@ -408,9 +534,11 @@ fn median_abs(v: &mut [f64]) -> f64 {
 /// in the motion's increment `(translation, rotation)`.
 /// One per template, `None` where it left the image or the background.
 type Rows = Vec<Option<Row>>;
-/// A template's brightness residual and its Jacobian, and its depth
-/// residual and Jacobian where the later depth is known.
-type Row = (f64, SVector<f64, 6>, Option<(f64, SVector<f64, 6>)>);
+/// A template's brightness residual and its Jacobian (a textured one), and
+/// its depth residual and Jacobian (where the later depth is known).
+type Row = (Option<Residual>, Option<Residual>);
+/// A residual and its Jacobian in the motion's increment.
+type Residual = (f64, SVector<f64, 6>);
 
 fn residuals(templates: &[Template], later: &Level, motion: &RigidMotion) -> Rows {
     let mut rows = Vec::with_capacity(templates.len());
@@ -438,7 +566,7 @@ fn residual(t: &Template, later: &Level, motion: &RigidMotion) -> Option<Row> {
             let rot = p.cross(&d);
             SVector::<f64, 6>::new(d.x, d.y, d.z, rot.x, rot.y, rot.z)
         };
-        let photometric = increment(du * gx + dv * gy);
+        let photometric = t.grey.map(|g| (grey - g, increment(du * gx + dv * gy)));
         let depth = (z > 0.0)
             .then(|| {
                 let (u, v) = (libm::round(x) as usize, libm::round(y) as usize);
@@ -459,17 +587,21 @@ fn residual(t: &Template, later: &Level, motion: &RigidMotion) -> Option<Row> {
                 })
             })
             .flatten();
-        Some((grey - t.grey, photometric, depth))
+        (photometric.is_some() || depth.is_some()).then_some((photometric, depth))
     }
 }
 
 /// Robust deviations of the brightness and depth residuals.
 fn spreads(rows: &Rows) -> (f64, f64) {
-    let mut b: Vec<f64> = rows.iter().flatten().map(|r| r.0).collect();
+    let mut b: Vec<f64> = rows
+        .iter()
+        .flatten()
+        .filter_map(|r| r.0.map(|b| b.0))
+        .collect();
     let mut d: Vec<f64> = rows
         .iter()
         .flatten()
-        .filter_map(|r| r.2.map(|d| d.0))
+        .filter_map(|r| r.1.map(|d| d.0))
         .collect();
     (
         (MAD_TO_SIGMA * median_abs(&mut b)).max(MIN_BRIGHTNESS_SIGMA),
@@ -478,8 +610,8 @@ fn spreads(rows: &Rows) -> (f64, f64) {
 }
 
 /// The robust loss of a row at deviations `(sb, sd)`.
-fn loss((rb, _, d): &Row, (sb, sd): (f64, f64)) -> f64 {
-    cauchy_loss(rb / sb) + d.map_or(0.0, |(rd, _)| cauchy_loss(rd / sd))
+fn loss((b, d): &Row, (sb, sd): (f64, f64)) -> f64 {
+    b.map_or(0.0, |(rb, _)| cauchy_loss(rb / sb)) + d.map_or(0.0, |(rd, _)| cauchy_loss(rd / sd))
 }
 
 /// One Gauss-Newton update of `motion`, or `None` when the normal
@@ -493,8 +625,10 @@ fn update(rows: &Rows, (sb, sd): (f64, f64)) -> Option<SVector<f64, 6>> {
         a += j * j.transpose() * w;
         g += j * (r * w);
     };
-    for (rb, jb, d) in rows.iter().flatten() {
-        add(*rb, jb, sb);
+    for (b, d) in rows.iter().flatten() {
+        if let Some((rb, jb)) = b {
+            add(*rb, jb, sb);
+        }
         if let Some((rd, jd)) = d {
             add(*rd, jd, sd);
         }
@@ -519,6 +653,10 @@ pub struct CameraMotion {
     /// drop, twice, in units of the residuals' variance; a chi-square of six
     /// degrees of freedom under no motion).
     pub gain: f64,
+    /// Mean move of those pixels, pixels of the finest level.
+    pub shift_px: f64,
+    /// Share of the decisive pixels it explains better than no motion.
+    pub support: f64,
 }
 
 /// The motion of the camera from `earlier` to `later` (two views of the
@@ -531,12 +669,20 @@ pub fn camera_motion(earlier: &BackgroundView, later: &BackgroundView) -> Option
     }
     let mut motion = RigidMotion::identity();
     let mut finest = None;
+    let on_plane = {
+        let points: Vec<Vec3> = templates(&earlier.levels[0], earlier.noise, None)
+            .iter()
+            .map(|t| t.point)
+            .collect();
+        support_plane(&points, earlier.focal)?
+    };
     for (k, (e, l)) in earlier.levels.iter().zip(&later.levels).enumerate().rev() {
         if e.width != l.width || e.height != l.height {
             return None;
         }
         // Halving averages four pixels: half the noise per level.
-        let templates = templates(e, earlier.noise / (1u32 << k) as f64);
+        let noise = earlier.noise / (1u32 << k) as f64;
+        let templates = templates(e, noise, Some((&on_plane, earlier.focal)));
         let depth =
             templates.iter().map(|t| t.point.z).sum::<f64>() / templates.len().max(1) as f64;
         for _ in 0..MAX_ITERATIONS {
@@ -564,28 +710,37 @@ pub fn camera_motion(earlier: &BackgroundView, later: &BackgroundView) -> Option
     let still = residuals(&templates, &later.levels[0], &RigidMotion::identity());
     // Judged on the pixels both follow, at the motion's deviations.
     let s = spreads(&moved);
-    let (mut points, mut gain, mut shift, mut better) = (0, 0.0, 0.0, 0);
+    let (mut points, mut gain, mut shift) = (0, 0.0, 0.0);
+    let (mut better, mut decisive) = (0usize, 0usize);
     let finest = &later.levels[0];
+
     for ((m, n), t) in moved.iter().zip(&still).zip(&templates) {
         if let (Some(m), Some(n)) = (m, n) {
             points += 1;
-            let drop = loss(n, s) - loss(m, s);
-            gain += 2.0 * drop;
-            better += usize::from(drop > 0.0);
+            let drop = 2.0 * (loss(n, s) - loss(m, s));
+            gain += drop;
+            if drop.abs() > DECISIVE {
+                decisive += 1;
+                better += usize::from(drop > 0.0);
+            }
             let (p, q) = (t.point, motion.apply(&t.point));
             let du = finest.fx * (q.x / q.z - p.x / p.z);
             let dv = finest.fy * (q.y / q.z - p.y / p.z);
             shift += libm::sqrt(du * du + dv * dv);
         }
     }
-    let resolved = points > 0 && shift / points as f64 >= MIN_RESOLVED_SHIFT;
-    let shared = better as f64 > WHOLE_BACKGROUND_SHARE * points as f64;
+    let shift_px = shift / points.max(1) as f64;
+    let support = better as f64 / decisive.max(1) as f64;
+    let resolved = shift_px >= MIN_RESOLVED_SHIFT;
+    let shared = decisive >= MIN_DECISIVE && support >= WHOLE_BACKGROUND_SHARE;
     let taken =
         points >= MIN_POINTS && resolved && shared && gain > SIGNIFICANCE && motion.is_finite();
     taken.then_some(CameraMotion {
         motion,
         points,
         gain,
+        shift_px,
+        support,
     })
 }
 
@@ -627,15 +782,14 @@ mod tests {
 
     /// Colour and depth of the table plane `z = 0` seen from a camera at
     /// `centre` looking down, turned by `turn` (a rotation vector), with
-    /// `noise` grey levels of noise; `stripe` (pixel columns) painted as a
-    /// moving thing of its own, shifted by `stripe_shift` pixels.
+    /// `noise` grey levels of noise, and a `thing` moving on its own.
     fn view(
         centre: Vec3,
         turn: Vec3,
         textured: bool,
         noise: f64,
         seed: u64,
-        stripe: Option<(usize, usize, f64)>,
+        thing: Option<Thing>,
     ) -> (Vec<u8>, Vec<u16>) {
         // Camera axes in the world: x right, y down (world -y), z down.
         let base = Matrix3::new(1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, -1.0);
@@ -654,18 +808,34 @@ mod tests {
                 let t = -centre.z / world_ray.z;
                 let hit = centre + world_ray * t;
                 let mut g = table(hit.x, hit.y, textured);
-                if let Some((u0, u1, shift)) = stripe {
-                    if u >= u0 && u < u1 {
-                        g = 128.0 + 100.0 * libm::sin(0.7 * (v as f64 + shift));
+                let mut z = t;
+                if let Some(thing) = &thing {
+                    let x = u as f64 - thing.shift;
+                    if x >= thing.columns.0 && x < thing.columns.1 && thing.rows.contains(&v) {
+                        g = 128.0
+                            + 100.0
+                                * libm::sin(0.7 * (v as f64 + thing.shift))
+                                * libm::cos(0.3 * x);
+                        z -= thing.lift;
                     }
                 }
                 g += noise * rng.normal();
                 let g = g.clamp(0.0, 255.0) as u8;
                 rgb[3 * (v * w + u)..3 * (v * w + u) + 3].copy_from_slice(&[g, g, g]);
-                depth[v * w + u] = libm::round(t * 1000.0) as u16;
+                depth[v * w + u] = libm::round(z * 1000.0) as u16;
             }
         }
         (rgb, depth)
+    }
+
+    /// Something textured moving on its own: pixel `columns` and `rows`,
+    /// moved `shift` pixels along the rows, `lift` metres above the table.
+    #[derive(Clone)]
+    struct Thing {
+        columns: (f64, f64),
+        rows: core::ops::Range<usize>,
+        shift: f64,
+        lift: f64,
     }
 
     fn background(images: &(Vec<u8>, Vec<u16>), rope: &Mask) -> BackgroundView {
@@ -729,9 +899,38 @@ mod tests {
                 rope.data[v * CAMERA.width as usize + u] = true;
             }
         }
-        let stripe = |shift| Some((100, 200, shift));
+        let stripe = |shift| {
+            Some(Thing {
+                columns: (100.0, 200.0),
+                rows: 0..CAMERA.height as usize,
+                shift,
+                lift: 0.0,
+            })
+        };
         let a = background(&view(HOME, Vec3::zeros(), true, 2.0, 1, stripe(0.0)), &rope);
         let b = background(&view(HOME, Vec3::zeros(), true, 2.0, 2, stripe(3.0)), &rope);
+        assert_eq!(camera_motion(&a, &b), None);
+    }
+
+    #[test]
+    fn a_box_sliding_over_a_plain_table_is_not_the_camera() {
+        // Nothing masks it: it is not the rope and no rectangle was declared.
+        let slid = |shift| {
+            Some(Thing {
+                columns: (60.0, 160.0),
+                rows: 60..180,
+                shift,
+                lift: 0.06,
+            })
+        };
+        let a = background(
+            &view(HOME, Vec3::zeros(), false, 1.0, 1, slid(0.0)),
+            &no_rope(),
+        );
+        let b = background(
+            &view(HOME, Vec3::zeros(), false, 1.0, 2, slid(6.0)),
+            &no_rope(),
+        );
         assert_eq!(camera_motion(&a, &b), None);
     }
 
