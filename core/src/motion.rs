@@ -5,6 +5,10 @@ use nalgebra::Matrix3;
 
 use crate::math::Vec3;
 
+/// How far from orthonormal a given rotation may be, per entry of `R^T R - I`:
+/// a rotation written out to six decimals passes, a scaling does not.
+pub const ROTATION_TOLERANCE: f64 = 1e-5;
+
 /// A rigid motion `p -> rotation * p + translation`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RigidMotion {
@@ -46,6 +50,16 @@ impl RigidMotion {
             rotation,
             translation: to_rows * (from_centre - to_centre),
         }
+    }
+
+    /// `true` when the rotation is one: orthonormal (within
+    /// [`ROTATION_TOLERANCE`] per entry of `R^T R - I`) with determinant 1,
+    /// not a mirror.
+    pub fn is_rotation(&self) -> bool {
+        let r = &self.rotation;
+        let off = r.transpose() * r - Matrix3::identity();
+        off.iter().all(|v| v.abs() <= ROTATION_TOLERANCE)
+            && (r.determinant() - 1.0).abs() <= 3.0 * ROTATION_TOLERANCE
     }
 
     /// `true` when every entry is finite.

@@ -13,6 +13,7 @@ use numpy::{
 use pyo3::create_exception;
 use pyo3::exceptions::{PyIndexError, PyValueError};
 use pyo3::prelude::*;
+use upetrack::motion::RigidMotion;
 use upetrack::{Algorithm, CameraIntrinsics, Frame, HsvRange, Params, Rect};
 use upetrack_io::run::{frame_record, run_frame};
 use upetrack_io::{Sequence as IoSequence, SequenceError as IoSequenceError, Source};
@@ -317,6 +318,33 @@ impl Tracker {
             track_ms: timed.track_ms,
             total_ms: timed.total_ms,
         })
+    }
+
+    /// The camera moved since the last frame (an arm's kinematics, an
+    /// IMU): `motion`, a 4 x 4 or 3 x 4 float64 rigid transform taking a
+    /// point's coordinates in the last frame's camera to this frame's
+    /// (metres). The tracked rope is moved with it before the next step.
+    fn move_camera(&mut self, motion: PyReadonlyArray2<'_, f64>) -> PyResult<()> {
+        let shape = motion.shape();
+        if !(shape == [4, 4] || shape == [3, 4]) {
+            return Err(PyValueError::new_err(format!(
+                "motion: shape {shape:?}, expected (4, 4) or (3, 4) float64"
+            )));
+        }
+        let m = motion.as_array();
+        if shape[0] == 4 && [m[[3, 0]], m[[3, 1]], m[[3, 2]], m[[3, 3]]] != [0.0, 0.0, 0.0, 1.0] {
+            return Err(PyValueError::new_err(
+                "motion: a rigid transform's last row is (0, 0, 0, 1)",
+            ));
+        }
+        let mut rigid = RigidMotion::identity();
+        for r in 0..3 {
+            for c in 0..3 {
+                rigid.rotation[(r, c)] = m[[r, c]];
+            }
+            rigid.translation[r] = m[[r, 3]];
+        }
+        self.inner.move_camera(&rigid).map_err(tracker_error)
     }
 
     /// Forgets the rope: the next frame finds it again.

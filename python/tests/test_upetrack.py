@@ -192,3 +192,30 @@ def test_a_grey_ropes_range_carries_its_chroma_noise(tmp_path):
     mine, theirs, plain = (t.step(color, depth, occlusions=seq.occlusions_at(0)) for t in (by_hand, own, without))
     assert mine.nodes.tolist() == theirs.nodes.tolist()
     assert plain.lost or plain.nodes.tolist() != mine.nodes.tolist()
+
+
+def test_a_known_camera_motion_moves_the_rope_and_a_bad_one_is_refused():
+    """move_camera takes a 4 x 4 or 3 x 4 rigid transform; the identity
+    changes nothing, a move changes what the next step starts from, and
+    what is not a rigid motion is an exception naming what is wrong."""
+    seq = upetrack.open(SAMPLE)
+    color, depth = seq[0]
+    told, untold, moved = seq.tracker(), seq.tracker(), seq.tracker()
+    for t in (told, untold, moved):
+        t.step(color, depth, occlusions=seq.occlusions_at(0))
+    told.move_camera(np.eye(4))
+    shift = np.eye(4)[:3].copy()
+    shift[:, 3] = (0.05, 0.0, 0.0)
+    moved.move_camera(shift)
+    color, depth = seq[1]
+    a, b, c = (t.step(color, depth, occlusions=seq.occlusions_at(1)) for t in (told, untold, moved))
+    assert a.nodes.tolist() == b.nodes.tolist()
+    assert c.nodes.tolist() != b.nodes.tolist()
+    mirror = np.eye(4)
+    mirror[0, 0] = -1.0
+    bottom = np.eye(4)
+    bottom[3, 0] = 1.0
+    for bad, words in ((np.eye(3), "shape"), (mirror, "orthonormal"), (bottom, "last row"),
+                       (np.full((3, 4), np.nan), "not finite")):
+        with pytest.raises(ValueError, match=words):
+            told.move_camera(bad)

@@ -73,9 +73,12 @@ pub enum TrackerError {
     /// An invalid rope prior.
     #[error(transparent)]
     Prior(#[from] PriorError),
-    /// A camera motion with a non-finite entry.
-    #[error("the camera's motion has a non-finite entry")]
-    CameraMotion,
+    /// A camera motion that is not a rigid motion.
+    #[error("not a camera motion: {reason}")]
+    CameraMotion {
+        /// What is wrong with it.
+        reason: &'static str,
+    },
     /// A snapshot that no tracker could have taken.
     #[error("a snapshot the tracker cannot return to: {reason}")]
     Snapshot {
@@ -326,8 +329,15 @@ impl Tracker {
     /// background's motion): the tracked rope is moved with it,
     /// so that the next step starts from where a rope at rest now is.
     pub fn move_camera(&mut self, motion: &RigidMotion) -> Result<(), TrackerError> {
-        if !motion.is_finite() {
-            return Err(TrackerError::CameraMotion);
+        let reason = if !motion.is_finite() {
+            Some("an entry is not finite")
+        } else if !motion.is_rotation() {
+            Some("its rotation is not orthonormal with determinant 1")
+        } else {
+            None
+        };
+        if let Some(reason) = reason {
+            return Err(TrackerError::CameraMotion { reason });
         }
         self.camera_given = true;
         self.carry_state(motion);
@@ -965,14 +975,20 @@ mod tests {
     }
 
     #[test]
-    fn a_camera_motion_carries_the_state_and_a_non_finite_one_is_refused() {
+    fn a_camera_motion_carries_the_state_and_a_non_rigid_one_is_refused() {
         let (mut t, nodes) = tracking_a_line(Params::default());
         let mut bad = RigidMotion::identity();
         bad.translation.x = f64::NAN;
-        assert!(matches!(
-            t.move_camera(&bad),
-            Err(TrackerError::CameraMotion)
-        ));
+        let mut mirror = RigidMotion::identity();
+        mirror.rotation[(0, 0)] = -1.0;
+        let mut scaling = RigidMotion::identity();
+        scaling.rotation *= 1.01;
+        for refused in [bad, mirror, scaling] {
+            assert!(matches!(
+                t.move_camera(&refused),
+                Err(TrackerError::CameraMotion { .. })
+            ));
+        }
         assert_eq!(t.nodes(), nodes.as_slice());
         let mut shift = RigidMotion::identity();
         shift.translation = Vec3::new(0.01, -0.02, 0.005);

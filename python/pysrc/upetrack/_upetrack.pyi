@@ -83,6 +83,9 @@ class Tracker:
         occlusions: Optional[Seq[_Rect]] = None,
     ) -> StepResult:
         """Track one frame: color uint8 H x W x 3 RGB, depth uint16 H x W, aligned to colour."""
+    def move_camera(self, motion: npt.NDArray[np.float64]) -> None:
+        """The camera moved since the last frame: a 4 x 4 or 3 x 4 rigid transform
+        from the last frame's camera coordinates to this frame's (metres)."""
     def reset(self) -> None:
         """Forget the rope: the next frame finds it again."""
 
