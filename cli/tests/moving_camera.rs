@@ -22,9 +22,19 @@ enum Told {
     Truth,
 }
 
+/// A drawn scene of the tuning range: a handheld camera (drift and
+/// tremor) at 1280x720, 0.58 m from a resting rope 69 % hidden by a
+/// declared rectangle.
+const HANDHELD_SEED: u64 = 1052;
+
 /// The mean error (mm) over the frames from the first occluded one.
 fn after_occlusion(params: Params, told: Told) -> f64 {
-    let mut s = Scenario::random(ARM_SEED, 48);
+    after_occlusion_of(ARM_SEED, params, told)
+}
+
+/// [`after_occlusion`] on the drawn scene of `seed`.
+fn after_occlusion_of(seed: u64, params: Params, told: Told) -> f64 {
+    let mut s = Scenario::random(seed, 48);
     let camera = s.camera();
     let mut tracker = Tracker::new(params, camera, s.hsv()).expect("tracker");
     let mut first_occluded = s.occlusions.first().map(|o| o.first);
@@ -90,6 +100,29 @@ fn a_camera_on_an_arm_is_followed_from_the_background() {
         ..Params::default()
     };
     let followed = after_occlusion(params, Told::ByParams);
+    eprintln!("after occlusion: {held:.2} mm held, {followed:.2} mm from the background");
+    // 1.46 mm when the view was read at 160 px from each block's centre.
+    assert!(
+        followed < 1.4 && followed < 0.3 * held,
+        "{held:.2} / {followed:.2} mm"
+    );
+}
+
+#[test]
+fn a_handheld_camera_at_1280x720_does_not_leave_the_hidden_rope_behind() {
+    let draw = Scenario::random(HANDHELD_SEED, 48)
+        .draw
+        .expect("a drawn scene");
+    assert!(matches!(
+        draw.camera.motion,
+        Some(CameraPath::Handheld { .. })
+    ));
+    let held = after_occlusion_of(HANDHELD_SEED, Params::default(), Told::ByParams);
+    let params = Params {
+        follow_camera: true,
+        ..Params::default()
+    };
+    let followed = after_occlusion_of(HANDHELD_SEED, params, Told::ByParams);
     eprintln!("after occlusion: {held:.2} mm held, {followed:.2} mm from the background");
     assert!(
         followed < 2.0 && followed < 0.3 * held,
