@@ -73,10 +73,10 @@ pub struct Params {
     /// neither rope nor declared occluder) and move the tracked rope with
     /// it before each step, so that a rope at rest stays at rest in the
     /// world when the camera is on an arm or in a hand. Shared by every
-    /// algorithm. Default false: it helps the randomised tuning range but
-    /// hurts the report range's tail (handheld cameras far away), and it
-    /// costs 0.8-0.9 ms a frame at 640x480 (see `docs/algorithm-notes.md`,
-    /// "The camera's own motion").
+    /// algorithm. Default false, for its cost only: it helps both randomised
+    /// ranges (report range median 3.05 -> 2.37 mm, p90 11.51 -> 8.96) but
+    /// costs 2.3-2.7 ms a frame (see `docs/algorithm-notes.md`, "The
+    /// camera's own motion"). Turn it on when the camera moves.
     /// [`crate::Tracker::move_camera`] takes a known motion instead.
     pub follow_camera: bool,
     /// UPETrack's registration and occlusion-estimate parameters (in a
