@@ -498,6 +498,18 @@ await test('bad link values, scene options, a missing camera and an image the br
       tryMake({ scenario: 'static-s', frames: 5, seed: 1, pull_scale: 5 }), tryMake({ scenario: 'static-s', frames: 5, seed: 1, rope_colour: 'pink' }),
       tryMake({ scenario: 'static-s', frames: 5, seed: 1, variant: 'x' })];
   });
+  // A camera motion is 12 numbers of a rigid transform.
+  const moved = await page.evaluate(async () => {
+    const w = await import('./pkg/upetrack_wasm.js');
+    const t = new w.WasmTracker({ camera: { width: 64, height: 48, fx: 60, fy: 60, cx: 32, cy: 24 } });
+    const tryMove = (m) => { try { t.moveCamera(new Float64Array(m)); return 'moved'; } catch (e) { return e.message; } };
+    const out = [tryMove([1, 0, 0, 0.01, 0, 1, 0, 0, 0, 0, 1, 0]), tryMove([1, 0, 0]), tryMove([-1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0]),
+      tryMove([1, 0, 0, NaN, 0, 1, 0, 0, 0, 0, 1, 0])];
+    t.free();
+    return out;
+  });
+  assert(moved[0] === 'moved' && moved[1].includes('3 numbers, expected the 12') && moved[2].includes('not orthonormal')
+    && moved[3].includes('not finite'), JSON.stringify(moved));
   assert(scene[0].includes('no scenario named `nope`') && scene[1].includes('frames must be in 1..=600') && scene[2].includes('pull_scale must be in [0, 3]')
     && scene[3].includes('no rope colour named `pink`') && scene[4].includes('no scene variant named `x`'), JSON.stringify(scene));
   await page.close();

@@ -277,6 +277,28 @@ impl WasmTracker {
         self.tracker.set_rope_hint(Some([u, v]));
     }
 
+    /// The camera moved since the last frame (a robot arm's kinematics, an
+    /// IMU): `motion` the 12 numbers of a rigid transform `[R | t]`, row
+    /// by row, from the last frame's camera coordinates to this frame's
+    /// (metres). The tracked rope is moved with it before the next frame.
+    #[wasm_bindgen(js_name = moveCamera)]
+    pub fn move_camera(&mut self, motion: &[f64]) -> Result<(), JsError> {
+        let Ok(m) = <&[f64; 12]>::try_from(motion) else {
+            return Err(JsError::new(&format!(
+                "moveCamera: {} numbers, expected the 12 of [R | t] row by row",
+                motion.len()
+            )));
+        };
+        let mut rigid = upetrack::motion::RigidMotion::identity();
+        for r in 0..3 {
+            for c in 0..3 {
+                rigid.rotation[(r, c)] = m[4 * r + c];
+            }
+            rigid.translation[r] = m[4 * r + 3];
+        }
+        self.tracker.move_camera(&rigid).map_err(js_err)
+    }
+
     /// The state after the last frame, to return to it with `restore`.
     pub fn snapshot(&self) -> Result<JsValue, JsError> {
         to_js(&self.tracker.snapshot())
