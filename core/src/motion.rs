@@ -52,6 +52,15 @@ impl RigidMotion {
         }
     }
 
+    /// The motion of the 3 x 4 matrix `[R | t]` given row by row (the
+    /// layout the Python and JavaScript bindings take).
+    pub fn from_rows(m: &[f64; 12]) -> Self {
+        Self {
+            rotation: Matrix3::new(m[0], m[1], m[2], m[4], m[5], m[6], m[8], m[9], m[10]),
+            translation: Vec3::new(m[3], m[7], m[11]),
+        }
+    }
+
     /// `true` when the rotation is one: orthonormal (within
     /// [`ROTATION_TOLERANCE`] per entry of `R^T R - I`) with determinant 1,
     /// not a mirror.
@@ -83,6 +92,16 @@ pub fn rotation_of(omega: &Vec3) -> Matrix3<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_motion_reads_its_rows_as_rotation_then_translation() {
+        let m = RigidMotion::from_rows(&[1., 2., 3., 4., 5., 6., 7., 8., 9., 10., 11., 12.]);
+        assert_eq!(
+            m.rotation,
+            Matrix3::new(1., 2., 3., 5., 6., 7., 9., 10., 11.)
+        );
+        assert_eq!(m.translation, Vec3::new(4., 8., 12.));
+    }
 
     #[test]
     fn a_camera_that_moved_sees_a_world_point_where_its_new_pose_puts_it() {

@@ -337,13 +337,8 @@ impl Tracker {
                 "motion: a rigid transform's last row is (0, 0, 0, 1)",
             ));
         }
-        let mut rigid = RigidMotion::identity();
-        for r in 0..3 {
-            for c in 0..3 {
-                rigid.rotation[(r, c)] = m[[r, c]];
-            }
-            rigid.translation[r] = m[[r, 3]];
-        }
+        let rows: [f64; 12] = core::array::from_fn(|k| m[[k / 4, k % 4]]);
+        let rigid = RigidMotion::from_rows(&rows);
         self.inner.move_camera(&rigid).map_err(tracker_error)
     }
 

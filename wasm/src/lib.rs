@@ -289,13 +289,7 @@ impl WasmTracker {
                 motion.len()
             )));
         };
-        let mut rigid = upetrack::motion::RigidMotion::identity();
-        for r in 0..3 {
-            for c in 0..3 {
-                rigid.rotation[(r, c)] = m[4 * r + c];
-            }
-            rigid.translation[r] = m[4 * r + 3];
-        }
+        let rigid = upetrack::motion::RigidMotion::from_rows(m);
         self.tracker.move_camera(&rigid).map_err(js_err)
     }
 

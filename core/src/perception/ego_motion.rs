@@ -138,6 +138,43 @@ impl Level {
         })
     }
 
+    /// A `width` x `height` level of images `grey`, `depth` and
+    /// `background`, each pixel `factor` pixels of the image whose
+    /// intrinsics are `(fx, fy, cx, cy)`; its gradients filled.
+    fn new(
+        (width, height): (usize, usize),
+        grey: Vec<f32>,
+        depth: Vec<f32>,
+        background: Vec<bool>,
+        (fx, fy, cx, cy): (f64, f64, f64, f64),
+        factor: f64,
+    ) -> Self {
+        Self {
+            width,
+            height,
+            grey,
+            depth,
+            background,
+            gx: Vec::new(),
+            gy: Vec::new(),
+            fx: fx / factor,
+            fy: fy / factor,
+            cx: (cx + 0.5) / factor - 0.5,
+            cy: (cy + 0.5) / factor - 0.5,
+        }
+        .with_gradients()
+    }
+
+    /// The depth's central-difference gradient at the pixel nearest the
+    /// inner point `(x, y)`, where its four neighbours' depths are known.
+    fn depth_gradient(&self, x: f64, y: f64) -> Option<(f64, f64)> {
+        let (u, v) = (libm::round(x) as usize, libm::round(y) as usize);
+        let at = |u, v| self.depth[self.at(u, v)];
+        let (l, r, a, b) = (at(u - 1, v), at(u + 1, v), at(u, v - 1), at(u, v + 1));
+        (l > 0.0 && r > 0.0 && a > 0.0 && b > 0.0)
+            .then_some((0.5 * (r - l) as f64, 0.5 * (b - a) as f64))
+    }
+
     /// Fills the gradient images from the brightness.
     fn with_gradients(mut self) -> Self {
         let w = self.width;
@@ -173,20 +210,8 @@ impl Level {
                 background[o] = ids.iter().all(|&i| self.background[i]);
             }
         }
-        Self {
-            width: w,
-            height: h,
-            grey,
-            depth,
-            background,
-            gx: Vec::new(),
-            gy: Vec::new(),
-            fx: 0.5 * self.fx,
-            fy: 0.5 * self.fy,
-            cx: 0.5 * (self.cx + 0.5) - 0.5,
-            cy: 0.5 * (self.cy + 0.5) - 0.5,
-        }
-        .with_gradients()
+        let intrinsics = (self.fx, self.fy, self.cx, self.cy);
+        Self::new((w, h), grey, depth, background, intrinsics, 2.0)
     }
 }
 
@@ -309,21 +334,9 @@ impl BackgroundView {
                 }
             }
         }
-        let sf = s as f64;
-        let mut levels = vec![Level {
-            width: w,
-            height: h,
-            grey,
-            depth,
-            background,
-            gx: Vec::new(),
-            gy: Vec::new(),
-            fx: camera.fx / sf,
-            fy: camera.fy / sf,
-            cx: (camera.cx + 0.5) / sf - 0.5,
-            cy: (camera.cy + 0.5) / sf - 0.5,
-        }
-        .with_gradients()];
+        let intrinsics = (camera.fx, camera.fy, camera.cx, camera.cy);
+        let finest = Level::new((w, h), grey, depth, background, intrinsics, s as f64);
+        let mut levels = vec![finest];
         while let Some(last) = levels.last() {
             if last.width as u32 <= COARSEST_WIDTH || last.height < 16 {
                 break;
@@ -562,45 +575,30 @@ fn residuals(templates: &[Template], later: &Level, motion: &RigidMotion) -> Row
 
 /// [`residuals`] of one template.
 fn residual(t: &Template, later: &Level, motion: &RigidMotion) -> Option<Row> {
-    {
-        let p = motion.apply(&t.point);
-        if !(p.z > 0.0) {
-            return None;
-        }
-        let x = later.fx * p.x / p.z + later.cx;
-        let y = later.fy * p.y / p.z + later.cy;
-        let (grey, gx, gy, z) = sample(later, x, y)?;
-        // d(pixel)/d(point), then d(point)/d(increment) = [I | -[p]x].
-        let iz = 1.0 / p.z;
-        let du = Vec3::new(later.fx * iz, 0.0, -later.fx * p.x * iz * iz);
-        let dv = Vec3::new(0.0, later.fy * iz, -later.fy * p.y * iz * iz);
-        let increment = |d: Vec3| {
-            let rot = p.cross(&d);
-            SVector::<f64, 6>::new(d.x, d.y, d.z, rot.x, rot.y, rot.z)
-        };
-        let photometric = t.grey.map(|g| (grey - g, increment(du * gx + dv * gy)));
-        let depth = (z > 0.0)
-            .then(|| {
-                let (u, v) = (libm::round(x) as usize, libm::round(y) as usize);
-                let (l, r) = (
-                    later.depth[later.at(u - 1, v)],
-                    later.depth[later.at(u + 1, v)],
-                );
-                let (a, b) = (
-                    later.depth[later.at(u, v - 1)],
-                    later.depth[later.at(u, v + 1)],
-                );
-                (l > 0.0 && r > 0.0 && a > 0.0 && b > 0.0).then(|| {
-                    let (zx, zy) = (0.5 * (r - l) as f64, 0.5 * (b - a) as f64);
-                    (
-                        z - p.z,
-                        increment(du * zx + dv * zy - Vec3::new(0.0, 0.0, 1.0)),
-                    )
-                })
-            })
-            .flatten();
-        (photometric.is_some() || depth.is_some()).then_some((photometric, depth))
+    let p = motion.apply(&t.point);
+    if !(p.z > 0.0) {
+        return None;
     }
+    let x = later.fx * p.x / p.z + later.cx;
+    let y = later.fy * p.y / p.z + later.cy;
+    let (grey, gx, gy, z) = sample(later, x, y)?;
+    // d(pixel)/d(point), then d(point)/d(increment) = [I | -[p]x].
+    let iz = 1.0 / p.z;
+    let du = Vec3::new(later.fx * iz, 0.0, -later.fx * p.x * iz * iz);
+    let dv = Vec3::new(0.0, later.fy * iz, -later.fy * p.y * iz * iz);
+    let increment = |d: Vec3| {
+        let rot = p.cross(&d);
+        SVector::<f64, 6>::new(d.x, d.y, d.z, rot.x, rot.y, rot.z)
+    };
+    let photometric = t.grey.map(|g| (grey - g, increment(du * gx + dv * gy)));
+    let depth = (z > 0.0)
+        .then(|| later.depth_gradient(x, y))
+        .flatten()
+        .map(|(zx, zy)| {
+            let along = du * zx + dv * zy - Vec3::new(0.0, 0.0, 1.0);
+            (z - p.z, increment(along))
+        });
+    (photometric.is_some() || depth.is_some()).then_some((photometric, depth))
 }
 
 /// Robust deviations of the brightness and depth residuals.
