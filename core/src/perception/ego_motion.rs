@@ -10,7 +10,6 @@
 //! nearly all pixels that decide side with it, so a still camera reads
 //! still.
 
-use alloc::vec;
 use alloc::vec::Vec;
 
 use nalgebra::{Matrix3, SMatrix, SVector};
@@ -52,6 +51,9 @@ pub const MIN_RESOLVED_SHIFT: f64 = 0.1;
 /// A background pixel lies on the support plane (the table) when it is
 /// within this many deviations of depth noise of it.
 pub const PLANE_SIGMAS: f64 = 3.0;
+/// Most pixels the brightness noise is measured on (an even grid): the
+/// median of that many is within about 1 % of the whole image's.
+pub const NOISE_SAMPLES: usize = 16_384;
 /// Random three-point trials of the support plane's search (seeded: the
 /// same plane on every run and target).
 const PLANE_TRIALS: usize = 64;
@@ -101,7 +103,7 @@ const SIGNIFICANCE: f64 = 22.46;
 const RIDGE: f64 = 1e-6;
 
 /// One level of a frame's pyramid.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default, PartialEq)]
 struct Level {
     width: usize,
     height: usize,
@@ -138,31 +140,28 @@ impl Level {
         })
     }
 
-    /// A `width` x `height` level of images `grey`, `depth` and
-    /// `background`, each pixel `factor` pixels of the image whose
-    /// intrinsics are `(fx, fy, cx, cy)`; its gradients filled.
-    fn new(
+    /// Makes this a `width` x `height` level, each pixel `factor` pixels of
+    /// the image whose intrinsics are `(fx, fy, cx, cy)`, reusing its
+    /// storage (a view is rebuilt every frame: fresh buffers of this size
+    /// cost more in page faults than the work done in them).
+    fn reshape(
+        &mut self,
         (width, height): (usize, usize),
-        grey: Vec<f32>,
-        depth: Vec<f32>,
-        background: Vec<bool>,
         (fx, fy, cx, cy): (f64, f64, f64, f64),
         factor: f64,
-    ) -> Self {
-        Self {
-            width,
-            height,
-            grey,
-            depth,
-            background,
-            gx: Vec::new(),
-            gy: Vec::new(),
-            fx: fx / factor,
-            fy: fy / factor,
-            cx: (cx + 0.5) / factor - 0.5,
-            cy: (cy + 0.5) / factor - 0.5,
+    ) {
+        let n = width * height;
+        (self.width, self.height) = (width, height);
+        for image in [&mut self.grey, &mut self.depth, &mut self.gx, &mut self.gy] {
+            image.clear();
+            image.resize(n, 0.0);
         }
-        .with_gradients()
+        self.background.clear();
+        self.background.resize(n, true);
+        self.fx = fx / factor;
+        self.fy = fy / factor;
+        self.cx = (cx + 0.5) / factor - 0.5;
+        self.cy = (cy + 0.5) / factor - 0.5;
     }
 
     /// The depth's central-difference gradient at the pixel nearest the
@@ -176,10 +175,8 @@ impl Level {
     }
 
     /// Fills the gradient images from the brightness.
-    fn with_gradients(mut self) -> Self {
+    fn fill_gradients(&mut self) {
         let w = self.width;
-        self.gx = vec![0.0; self.grey.len()];
-        self.gy = vec![0.0; self.grey.len()];
         for v in 1..self.height.saturating_sub(1) {
             for u in 1..w - 1 {
                 let i = v * w + u;
@@ -187,51 +184,47 @@ impl Level {
                 self.gy[i] = 0.5 * (self.grey[i + w] - self.grey[i - w]);
             }
         }
-        self
     }
 
-    /// The level below, halved by 2x2 averages.
-    fn halved(&self) -> Self {
+    /// Makes `out` this level halved by 2x2 averages.
+    fn halve_into(&self, out: &mut Level) {
         let (w, h) = (self.width / 2, self.height / 2);
-        let mut grey = vec![0.0; w * h];
-        let mut depth = vec![0.0; w * h];
-        let mut background = vec![false; w * h];
+        let intrinsics = (self.fx, self.fy, self.cx, self.cy);
+        out.reshape((w, h), intrinsics, 2.0);
         for v in 0..h {
+            let top = 2 * v * self.width;
+            let bottom = top + self.width;
             for u in 0..w {
                 let ids = [
-                    self.at(2 * u, 2 * v),
-                    self.at(2 * u + 1, 2 * v),
-                    self.at(2 * u, 2 * v + 1),
-                    self.at(2 * u + 1, 2 * v + 1),
+                    top + 2 * u,
+                    top + 2 * u + 1,
+                    bottom + 2 * u,
+                    bottom + 2 * u + 1,
                 ];
                 let o = v * w + u;
-                grey[o] = 0.25 * ids.iter().map(|&i| self.grey[i]).sum::<f32>();
-                depth[o] = agreed_depth(ids.iter().map(|&i| self.depth[i]));
-                background[o] = ids.iter().all(|&i| self.background[i]);
+                out.grey[o] = 0.25 * ids.map(|i| self.grey[i]).iter().sum::<f32>();
+                out.depth[o] = agreed_depth(ids.map(|i| self.depth[i]));
+                out.background[o] = ids.iter().all(|&i| self.background[i]);
             }
         }
-        let intrinsics = (self.fx, self.fy, self.cx, self.cy);
-        Self::new((w, h), grey, depth, background, intrinsics, 2.0)
+        out.fill_gradients();
     }
 }
 
-/// The mean of `depths` when all are known and agree (one surface), else 0.
-fn agreed_depth(depths: impl Iterator<Item = f32>) -> f32 {
-    let (mut lo, mut hi, mut sum, mut n) = (f32::INFINITY, 0.0f32, 0.0f32, 0u32);
-    for z in depths {
-        if !(z > 0.0) {
-            return 0.0;
-        }
-        lo = lo.min(z);
-        hi = hi.max(z);
-        sum += z;
-        n += 1;
-    }
-    if n == 0 {
-        return 0.0;
-    }
-    let mean = sum / n as f32;
-    if hi - lo <= DEPTH_AGREEMENT * mean {
+/// The mean of four `depths` when all are known and agree (one surface),
+/// else 0.
+fn agreed_depth(depths: [f32; 4]) -> f32 {
+    // Plain comparisons (no NaN can reach them): the library's min and max
+    // handle NaN at a cost this loop over every block notices.
+    let [a, b, c, d] = depths;
+    let (ab, cd) = (
+        if a < b { (a, b) } else { (b, a) },
+        if c < d { (c, d) } else { (d, c) },
+    );
+    let lo = if ab.0 < cd.0 { ab.0 } else { cd.0 };
+    let hi = if ab.1 > cd.1 { ab.1 } else { cd.1 };
+    let mean = 0.25 * (a + b + c + d);
+    if lo > 0.0 && hi - lo <= DEPTH_AGREEMENT * mean {
         mean
     } else {
         0.0
@@ -239,13 +232,17 @@ fn agreed_depth(depths: impl Iterator<Item = f32>) -> f32 {
 }
 
 /// What the motion estimate keeps of one frame: its pyramid, finest first.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct BackgroundView {
     levels: Vec<Level>,
     /// Brightness noise of the finest level, grey levels.
     noise: f64,
     /// The full image's focal length, pixels (for the depth noise).
     focal: f64,
+    /// Working rows of the finest level: block sums and the rope's blocks
+    /// (kept to be reused).
+    sums: Vec<u32>,
+    rope: Vec<bool>,
 }
 
 impl BackgroundView {
@@ -260,95 +257,162 @@ impl BackgroundView {
         occluders: &[Rect],
         depth_range: (f64, f64),
     ) -> Self {
+        let mut view = Self::default();
+        view.rebuild(frame, camera, rope, occluders, depth_range);
+        view
+    }
+
+    /// [`BackgroundView::new`] into this view's storage: a tracker keeps
+    /// two views (the last frame's and a spare) and rebuilds the spare.
+    pub fn rebuild(
+        &mut self,
+        frame: &Frame<'_>,
+        camera: &CameraIntrinsics,
+        rope: &Mask,
+        occluders: &[Rect],
+        depth_range: (f64, f64),
+    ) {
         let (fw, fh) = (frame.width as usize, frame.height as usize);
         let s = (frame.width.div_ceil(FINEST_WIDTH)).max(1) as usize;
         let (w, h) = (fw / s, fh / s);
-        let mut excluded = vec![false; w * h];
-        let rope_fits = rope.width == frame.width && rope.height == frame.height;
-        let (zmin, zmax) = (depth_range.0 as f32, depth_range.1 as f32);
-        let scale = frame.depth_scale as f32;
-        let mut grey = vec![0.0f32; w * h];
-        let mut depth = vec![0.0f32; w * h];
+        let intrinsics = (camera.fx, camera.fy, camera.cx, camera.cy);
+        if self.levels.is_empty() {
+            self.levels.push(Level::default());
+        }
+        let finest = &mut self.levels[0];
+        finest.reshape((w, h), intrinsics, s as f64);
+        self.fill_brightness(frame, s);
+        self.fill_depth(frame, s, rope, depth_range);
+        self.leave_out(frame, s, occluders);
+        let finest = &mut self.levels[0];
+        finest.fill_gradients();
+        let mut count = 1;
+        while count < self.levels.len() + 1 {
+            let last = &self.levels[count - 1];
+            if last.width as u32 <= COARSEST_WIDTH || last.height < 16 {
+                break;
+            }
+            if count == self.levels.len() {
+                self.levels.push(Level::default());
+            }
+            let (done, rest) = self.levels.split_at_mut(count);
+            done[count - 1].halve_into(&mut rest[0]);
+            count += 1;
+        }
+        self.levels.truncate(count);
+        self.noise = noise(&self.levels[0]);
+        self.focal = camera.fx.max(camera.fy);
+    }
+
+    /// The finest level's brightness: the mean of each `s` x `s` block.
+    fn fill_brightness(&mut self, frame: &Frame<'_>, s: usize) {
+        let fw = frame.width as usize;
+        let finest = &mut self.levels[0];
+        let (w, h) = (finest.width, finest.height);
         // Brightness is the whole block's mean: reading fewer pixels would
         // alias the table's fine texture, which then changes under a move
         // of less than a block. Row by row, so the image is read in order.
-        let mut sums = vec![0u32; w];
+        self.sums.clear();
+        self.sums.resize(w, 0);
+        let inv = 1.0 / (4 * s * s) as f32;
         for v in 0..h {
-            sums.iter_mut().for_each(|x| *x = 0);
+            self.sums.iter_mut().for_each(|x| *x = 0);
             for y in v * s..(v + 1) * s {
                 let row = &frame.color[3 * y * fw..3 * (y * fw + w * s)];
-                for (sum, block) in sums.iter_mut().zip(row.chunks_exact(3 * s)) {
+                for (sum, block) in self.sums.iter_mut().zip(row.chunks_exact(3 * s)) {
                     for c in block.chunks_exact(3) {
                         // Luma close enough, in integers: (R + 2G + B) / 4.
                         *sum += c[0] as u32 + 2 * c[1] as u32 + c[2] as u32;
                     }
                 }
             }
-            let inv = 1.0 / (4 * s * s) as f32;
-            for (u, sum) in sums.iter().enumerate() {
-                grey[v * w + u] = *sum as f32 * inv;
+            for (grey, sum) in finest.grey[v * w..(v + 1) * w].iter_mut().zip(&self.sums) {
+                *grey = *sum as f32 * inv;
             }
         }
+    }
+
+    /// The finest level's depth, and the rope's blocks.
+    fn fill_depth(&mut self, frame: &Frame<'_>, s: usize, rope: &Mask, depth_range: (f64, f64)) {
+        let fw = frame.width as usize;
+        let finest = &mut self.levels[0];
+        let (w, h) = (finest.width, finest.height);
         // Depth and the mask at each block's centre 2x2 pixels (one pixel
         // four times when the block is one pixel): depth is smooth where it
         // is used, and the mask is widened by a block below.
         let (off, step) = if s >= 2 { (s / 2 - 1, 1) } else { (0, 0) };
-        let reading = |z: u16| {
-            let z = z as f32 * scale;
-            if z >= zmin && z <= zmax {
-                z
+        // The depth range in the frame's units (0, unknown, is outside it):
+        // `first..=first + span`, empty when no unit is inside.
+        let scale = frame.depth_scale;
+        // (A millionth of a unit's slack: 1.234 / 0.001 is 1233.99...).
+        let first = libm::ceil(depth_range.0 / scale - 1e-6).max(1.0);
+        let last = libm::floor(depth_range.1 / scale + 1e-6).min(u16::MAX as f64);
+        let (first, span, scale) = if first <= last {
+            (first as u16, (last - first) as u16, scale as f32)
+        } else {
+            (1, 0, 0.0)
+        };
+        let metres = |z: u16| {
+            if z.wrapping_sub(first) <= span {
+                z as f32 * scale
             } else {
                 0.0
             }
         };
+        let rope_fits = rope.width == frame.width && rope.height == frame.height;
+        self.rope.clear();
+        self.rope.resize(w * h, false);
         for v in 0..h {
             let top = (v * s + off) * fw;
             let bottom = top + step * fw;
-            for u in 0..w {
-                let x = u * s + off;
-                let ids = [top + x, top + x + step, bottom + x, bottom + x + step];
-                let o = v * w + u;
-                excluded[o] = rope_fits && ids.iter().any(|&i| rope.data[i]);
-                depth[o] = agreed_depth(ids.iter().map(|&i| reading(frame.depth[i])));
+            let (d0, d1) = (
+                &frame.depth[top..top + fw],
+                &frame.depth[bottom..bottom + fw],
+            );
+            let blocks = d0[off..].chunks_exact(s).zip(d1[off..].chunks_exact(s));
+            for (out, (a, b)) in finest.depth[v * w..(v + 1) * w].iter_mut().zip(blocks) {
+                *out = agreed_depth([a[0], a[step], b[0], b[step]].map(metres));
+            }
+            if rope_fits {
+                let (m0, m1) = (&rope.data[top..top + fw], &rope.data[bottom..bottom + fw]);
+                // Most rows have no rope: a branch-free test of the whole row.
+                if !m0.iter().chain(m1).fold(false, |any, &m| any | m) {
+                    continue;
+                }
+                for u in 0..w {
+                    let (x, y) = (u * s + off, u * s + off + step);
+                    self.rope[v * w + u] = m0[x] || m0[y] || m1[x] || m1[y];
+                }
             }
         }
+    }
+
+    /// The finest level's background: all but the rope's blocks widened
+    /// by one and the declared `occluders`.
+    fn leave_out(&mut self, frame: &Frame<'_>, s: usize, occluders: &[Rect]) {
+        let finest = &mut self.levels[0];
+        let (w, h) = (finest.width, finest.height);
         // The rope's edge and shadow move with it: one pixel round the mask.
-        let mut background = vec![true; w * h];
-        for v in 0..h {
-            for u in 0..w {
-                if excluded[v * w + u] {
-                    for y in v.saturating_sub(1)..(v + 2).min(h) {
-                        for x in u.saturating_sub(1)..(u + 2).min(w) {
-                            background[y * w + x] = false;
-                        }
-                    }
+        for (v, row) in self.rope.chunks_exact(w).enumerate() {
+            if !row.iter().fold(false, |any, &r| any | r) {
+                continue;
+            }
+            for u in (0..w).filter(|&u| row[u]) {
+                let (left, right) = (u.saturating_sub(1), (u + 2).min(w));
+                for y in v.saturating_sub(1)..(v + 2).min(h) {
+                    finest.background[y * w + left..y * w + right].fill(false);
                 }
             }
         }
         for r in occluders {
             if let Some((x0, x1, y0, y1)) = r.clip(frame.width, frame.height) {
                 for v in y0 / s..y1.div_ceil(s).min(h) {
-                    for b in &mut background[v * w + x0 / s..v * w + x1.div_ceil(s).min(w)] {
+                    let row = &mut finest.background[v * w..(v + 1) * w];
+                    for b in &mut row[x0 / s..x1.div_ceil(s).min(w)] {
                         *b = false;
                     }
                 }
             }
-        }
-        let intrinsics = (camera.fx, camera.fy, camera.cx, camera.cy);
-        let finest = Level::new((w, h), grey, depth, background, intrinsics, s as f64);
-        let mut levels = vec![finest];
-        while let Some(last) = levels.last() {
-            if last.width as u32 <= COARSEST_WIDTH || last.height < 16 {
-                break;
-            }
-            let next = last.halved();
-            levels.push(next);
-        }
-        let noise = noise(&levels[0]);
-        Self {
-            levels,
-            noise,
-            focal: camera.fx.max(camera.fy),
         }
     }
 }
@@ -361,43 +425,107 @@ struct Template {
     grey: Option<f64>,
 }
 
-/// The background pixels of `level` with a depth, one in each cell of a
-/// grid: the one with the strongest gradient above [`GRADIENT_FLOOR`],
-/// followed by brightness and depth, else the cell's first, followed by
-/// depth alone. Every part of the background speaks: a plain table by its
-/// plane, so that a textured hand moving over it is outvoted.
-/// `noise` is the level's brightness noise.
-/// With a `plane` (and the focal length for its tolerance), only pixels on
-/// it count, and a textured one only when the four neighbours its gradient
-/// is taken from are on it too: the edge of a box standing on the table is
-/// the box's texture, not the table's.
-fn templates(level: &Level, noise: f64, plane: Option<(&Plane, f64)>) -> Vec<Template> {
+/// The side, pixels, of the grid cells that give `level` at most
+/// [`MAX_POINTS`] followed pixels.
+fn cell_side(level: &Level) -> usize {
+    let area = level.width * level.height;
+    (libm::ceil(libm::sqrt(area as f64 / MAX_POINTS as f64)) as usize).max(1)
+}
+
+/// The background pixels of `level` with a depth, one in each grid cell
+/// (its first in reading order), in 3D: an even spread to find the
+/// support plane from.
+fn spread_points(level: &Level) -> Vec<Vec3> {
+    let (w, h) = (level.width, level.height);
+    let cell = cell_side(level);
+    let mut out = Vec::new();
+    for cv in (0..h).step_by(cell) {
+        for cu in (0..w).step_by(cell) {
+            let first = (cv..(cv + cell).min(h))
+                .flat_map(|v| (cu..(cu + cell).min(w)).map(move |u| (u, v)))
+                .find(|&(u, v)| level.background[v * w + u] && level.depth[v * w + u] > 0.0);
+            out.extend(first.and_then(|(u, v)| level.point(u, v)));
+        }
+    }
+    out
+}
+
+/// The background pixels of `level` on the support `plane` (`focal` sets
+/// its tolerance), one in each cell of a grid: the one with the strongest
+/// gradient above [`GRADIENT_FLOOR`] whose four neighbours (its gradient's
+/// stencil) are on the plane too, followed by brightness and depth, else
+/// the cell's first on the plane, followed by depth alone. Every part of
+/// the table speaks, a plain one by its plane, so that a textured hand
+/// moving over it is outvoted; the edge of a box standing on the table is
+/// the box's texture, not the table's. `noise` is the level's brightness
+/// noise.
+fn templates(level: &Level, noise: f64, plane: &Plane, focal: f64) -> Vec<Template> {
+    let (w, h) = (level.width, level.height);
+    if w < 3 || h < 3 {
+        return Vec::new();
+    }
+    // `n . p` of pixel (u, v) at depth z is `z (a u + b v + c)`.
+    let n = plane.normal;
+    let (a, b) = (n.x / level.fx, n.y / level.fy);
+    let c = n.z - a * level.cx - b * level.cy;
     let on = |u: usize, v: usize| {
-        plane.is_none_or(|(plane, focal)| level.point(u, v).is_some_and(|p| plane.holds(&p, focal)))
+        let z = level.depth[v * w + u] as f64;
+        z > 0.0
+            && Plane::within(
+                z * (a * u as f64 + b * v as f64 + c) - plane.offset,
+                z,
+                focal,
+            )
     };
     let floor =
         GRADIENT_FLOOR.max((GRADIENT_NOISE_SCALES * noise / core::f64::consts::SQRT_2) as f32);
-    let area = level.width * level.height;
-    let cell = (libm::ceil(libm::sqrt(area as f64 / MAX_POINTS as f64)) as usize).max(1);
+    let floor2 = floor * floor;
+    let cell = cell_side(level);
+    let valid = |i: usize| level.background[i] && level.depth[i] > 0.0;
+    let g2 = |i: usize| level.gx[i] * level.gx[i] + level.gy[i] * level.gy[i];
+    let stencil = |u: usize, v: usize| {
+        on(u, v) && on(u - 1, v) && on(u + 1, v) && on(u, v - 1) && on(u, v + 1)
+    };
     let mut out = Vec::new();
-    for cv in (1..level.height - 1).step_by(cell) {
-        for cu in (1..level.width - 1).step_by(cell) {
-            let mut best: Option<(f32, usize, usize)> = None;
-            let mut plain = None;
-            for v in cv..(cv + cell).min(level.height - 1) {
-                for u in cu..(cu + cell).min(level.width - 1) {
-                    let i = level.at(u, v);
-                    if !level.background[i] || !(level.depth[i] > 0.0) {
-                        continue;
+    for cv in (1..h - 1).step_by(cell) {
+        for cu in (1..w - 1).step_by(cell) {
+            let (rows, columns) = (cv..(cv + cell).min(h - 1), cu..(cu + cell).min(w - 1));
+            // The cell's strongest valid pixel and its first: when these
+            // are on the plane (nearly always) they are the answer, found
+            // without asking every pixel.
+            let (mut strongest, mut first) = (None::<(f32, usize, usize)>, None);
+            for v in rows.clone() {
+                for u in columns.clone() {
+                    let i = v * w + u;
+                    if valid(i) {
+                        first = first.or(Some((u, v)));
+                        let g = g2(i);
+                        if strongest.is_none_or(|b| g > b.0) {
+                            strongest = Some((g, u, v));
+                        }
                     }
-                    let (gx, gy) = (level.gx[i], level.gy[i]);
-                    let g = libm::sqrtf(gx * gx + gy * gy);
-                    let better = g >= floor && best.is_none_or(|b| g > b.0);
-                    if (plain.is_none() || better) && on(u, v) {
-                        plain = plain.or(Some((u, v)));
-                        let stencil = [(u - 1, v), (u + 1, v), (u, v - 1), (u, v + 1)];
-                        if better && stencil.iter().all(|&(x, y)| on(x, y)) {
-                            best = Some((g, u, v));
+                }
+            }
+            let mut best = strongest.filter(|&(g, u, v)| g >= floor2 && stencil(u, v));
+            let mut plain = first.filter(|&(u, v)| on(u, v));
+            let textured = strongest.is_some_and(|(g, _, _)| g >= floor2);
+            if best.is_none() && (textured || plain.is_none()) {
+                // The pixel-by-pixel rule: the strongest whose stencil is
+                // on the plane, and the first on it.
+                (best, plain) = (None, None);
+                for v in rows.clone() {
+                    for u in columns.clone() {
+                        let i = v * w + u;
+                        if !valid(i) {
+                            continue;
+                        }
+                        let g = g2(i);
+                        let better = g >= floor2 && best.is_none_or(|b| g > b.0);
+                        if (plain.is_none() || better) && on(u, v) {
+                            plain = plain.or(Some((u, v)));
+                            if better && stencil(u, v) {
+                                best = Some((g, u, v));
+                            }
                         }
                     }
                 }
@@ -407,7 +535,7 @@ fn templates(level: &Level, noise: f64, plane: Option<(&Plane, f64)>) -> Vec<Tem
                 if let Some(point) = level.point(u, v) {
                     out.push(Template {
                         point,
-                        grey: textured.then_some(level.grey[level.at(u, v)] as f64),
+                        grey: textured.then_some(level.grey[v * w + u] as f64),
                     });
                 }
             }
@@ -436,17 +564,12 @@ impl Plane {
         })
     }
 
-    fn distance(&self, p: &Vec3) -> f64 {
-        (self.normal.dot(p) - self.offset).abs()
-    }
-
-    /// How far from a plane `p` may lie and still be on it.
-    fn tolerance(p: &Vec3, focal: f64) -> f64 {
-        PLANE_SIGMAS * crate::perception::camera::depth_noise(p.z, focal).max(MIN_DEPTH_SIGMA)
-    }
-
-    fn holds(&self, p: &Vec3, focal: f64) -> bool {
-        self.distance(p) <= Self::tolerance(p, focal)
+    /// Whether a point at depth `z` whose signed distance from a plane is
+    /// `distance` lies on it: within [`PLANE_SIGMAS`] deviations of depth
+    /// noise.
+    fn within(distance: f64, z: f64, focal: f64) -> bool {
+        let noise = crate::perception::camera::depth_noise(z, focal).max(MIN_DEPTH_SIGMA);
+        distance.abs() <= PLANE_SIGMAS * noise
     }
 }
 
@@ -460,11 +583,7 @@ fn support_plane(points: &[Vec3], focal: f64) -> Option<Plane> {
     // Trials are scored on an even subset; a plane holding most points
     // holds most of any even share of them.
     let stride = points.len().div_ceil(PLANE_SCORED_POINTS);
-    let scored: Vec<(Vec3, f64)> = points
-        .iter()
-        .step_by(stride)
-        .map(|p| (*p, Plane::tolerance(p, focal)))
-        .collect();
+    let scored: Vec<Vec3> = points.iter().step_by(stride).copied().collect();
     let mut rng = crate::rng::SplitMix64::new(0x7AB1E);
     let mut best: Option<(usize, Plane)> = None;
     let n = points.len() as u64;
@@ -476,7 +595,7 @@ fn support_plane(points: &[Vec3], focal: f64) -> Option<Plane> {
         };
         let count = scored
             .iter()
-            .filter(|(p, tol)| plane.distance(p) <= *tol)
+            .filter(|p| Plane::within(plane.normal.dot(p) - plane.offset, p.z, focal))
             .count();
         if best.is_none_or(|(k, _)| count > k) {
             best = Some((count, plane));
@@ -487,15 +606,19 @@ fn support_plane(points: &[Vec3], focal: f64) -> Option<Plane> {
 
 /// The brightness noise of `level`'s background, grey levels: the robust
 /// spread of the Laplacian `4 I - (its four neighbours)`, whose variance is
-/// 20 times the noise's where the image is flat.
+/// 20 times the noise's where the image is flat. Read on an even grid of
+/// at most [`NOISE_SAMPLES`] pixels.
 fn noise(level: &Level) -> f64 {
-    let mut laplacian = Vec::new();
-    for v in 1..level.height - 1 {
-        for u in 1..level.width - 1 {
-            let i = level.at(u, v);
+    let (w, h) = (level.width, level.height);
+    let interior = w.saturating_sub(2) * h.saturating_sub(2);
+    let stride = (libm::ceil(libm::sqrt(interior as f64 / NOISE_SAMPLES as f64)) as usize).max(1);
+    let g = &level.grey;
+    let mut laplacian = Vec::with_capacity(interior / (stride * stride) + w + h);
+    for v in (1..h.saturating_sub(1)).step_by(stride) {
+        for u in (1..w.saturating_sub(1)).step_by(stride) {
+            let i = v * w + u;
             if level.background[i] {
-                let g = &level.grey;
-                let l = 4.0 * g[i] - g[i - 1] - g[i + 1] - g[i - level.width] - g[i + level.width];
+                let l = 4.0 * g[i] - g[i - 1] - g[i + 1] - g[i - w] - g[i + w];
                 laplacian.push(l as f64);
             }
         }
@@ -518,14 +641,13 @@ fn sample(level: &Level, x: f64, y: f64) -> Option<(f64, f64, f64, f64)> {
     if !level.background[near] {
         return None;
     }
-    let lerp = |f: &dyn Fn(usize, usize) -> f32| {
-        let top = f(u, v) * (1.0 - a) + f(u + 1, v) * a;
-        let bottom = f(u, v + 1) * (1.0 - a) + f(u + 1, v + 1) * a;
+    let (i, w) = (level.at(u, v), level.width);
+    let lerp = |image: &[f32]| {
+        let top = image[i] * (1.0 - a) + image[i + 1] * a;
+        let bottom = image[i + w] * (1.0 - a) + image[i + w + 1] * a;
         (top * (1.0 - b) + bottom * b) as f64
     };
-    let grey = lerp(&|u, v| level.grey[level.at(u, v)]);
-    let gx = lerp(&|u, v| level.gx[level.at(u, v)]);
-    let gy = lerp(&|u, v| level.gy[level.at(u, v)]);
+    let (grey, gx, gy) = (lerp(&level.grey), lerp(&level.gx), lerp(&level.gy));
     Some((grey, gx, gy, level.depth[near] as f64))
 }
 
@@ -632,7 +754,8 @@ fn update(rows: &Rows, (sb, sd): (f64, f64)) -> Option<SVector<f64, 6>> {
     let mut add = |r: f64, j: &SVector<f64, 6>, s: f64| {
         let (r, j) = (r / s, j / s);
         let w = cauchy_weight(r);
-        a += j * j.transpose() * w;
+        // The lower triangle only: the matrix is symmetric.
+        a.syger(w, &j, &j, 1.0);
         g += j * (r * w);
     };
     for (b, d) in rows.iter().flatten() {
@@ -643,6 +766,7 @@ fn update(rows: &Rows, (sb, sd): (f64, f64)) -> Option<SVector<f64, 6>> {
             add(*rd, jd, sd);
         }
     }
+    a.fill_upper_triangle_with_lower_triangle();
     let scale = a.trace() / 6.0;
     if !(scale > 0.0) {
         return None;
@@ -679,20 +803,14 @@ pub fn camera_motion(earlier: &BackgroundView, later: &BackgroundView) -> Option
     }
     let mut motion = RigidMotion::identity();
     let mut finest = None;
-    let on_plane = {
-        let points: Vec<Vec3> = templates(&earlier.levels[0], earlier.noise, None)
-            .iter()
-            .map(|t| t.point)
-            .collect();
-        support_plane(&points, earlier.focal)?
-    };
+    let on_plane = { support_plane(&spread_points(&earlier.levels[0]), earlier.focal)? };
     for (k, (e, l)) in earlier.levels.iter().zip(&later.levels).enumerate().rev() {
         if e.width != l.width || e.height != l.height {
             return None;
         }
         // Halving averages four pixels: half the noise per level.
         let noise = earlier.noise / (1u32 << k) as f64;
-        let templates = templates(e, noise, Some((&on_plane, earlier.focal)));
+        let templates = templates(e, noise, &on_plane, earlier.focal);
         let depth =
             templates.iter().map(|t| t.point.z).sum::<f64>() / templates.len().max(1) as f64;
         for _ in 0..MAX_ITERATIONS {
@@ -758,6 +876,7 @@ pub fn camera_motion(earlier: &BackgroundView, later: &BackgroundView) -> Option
 mod tests {
     use super::*;
     use crate::rng::SplitMix64;
+    use alloc::vec;
 
     const CAMERA: CameraIntrinsics = CameraIntrinsics {
         width: 320,
@@ -954,5 +1073,77 @@ mod tests {
             &rope,
         );
         assert_eq!(camera_motion(&a, &b), None);
+    }
+
+    #[test]
+    fn four_depths_agree_only_when_all_are_known_and_close() {
+        assert_eq!(agreed_depth([1.0, 1.0, 1.0, 1.0]), 1.0);
+        assert!((agreed_depth([1.0, 1.01, 0.995, 1.005]) - 1.0025).abs() < 1e-6);
+        // An unknown depth in any place, or a step between two surfaces.
+        for unknown in 0..4 {
+            let mut z = [1.0; 4];
+            z[unknown] = 0.0;
+            assert_eq!(agreed_depth(z), 0.0, "{z:?}");
+        }
+        assert_eq!(agreed_depth([1.0, 1.0, 1.0, 1.05]), 0.0);
+        assert_eq!(agreed_depth([1.05, 1.0, 1.0, 1.0]), 0.0);
+    }
+
+    #[test]
+    fn depths_outside_the_range_are_unknown() {
+        // A tilted camera: the table's depth runs from `near` to `far`.
+        let (rgb, depth) = view(HOME, Vec3::new(0.3, 0.0, 0.0), true, 0.0, 1, None);
+        let frame = Frame::new(CAMERA.width, CAMERA.height, &rgb, &depth, 0.001).expect("frame");
+        let known = |range| {
+            let v = BackgroundView::new(&frame, &CAMERA, &no_rope(), &[], range);
+            v.levels[0].depth.iter().filter(|&&z| z > 0.0).count()
+        };
+        let near = *depth.iter().min().expect("pixels") as f64 / 1000.0;
+        let far = *depth.iter().max().expect("pixels") as f64 / 1000.0;
+        assert!(far - near > 0.1, "{near}..{far}");
+        let all = known((near, far));
+        assert_eq!(all, CAMERA.width as usize * CAMERA.height as usize);
+        assert_eq!(known((0.1, near - 0.001)), 0);
+        assert_eq!(known((far + 0.001, 3.0)), 0);
+        assert_eq!(known((far, near)), 0);
+        let half = known((near, 0.5 * (near + far)));
+        assert!(half > all / 4 && half < 3 * all / 4, "{half} of {all}");
+    }
+
+    #[test]
+    fn a_view_rebuilt_in_another_frames_storage_is_the_view_built_afresh() {
+        let rope = {
+            let mut m = no_rope();
+            for v in 100..110 {
+                for u in 40..200 {
+                    m.data[v * CAMERA.width as usize + u] = true;
+                }
+            }
+            m
+        };
+        let images = view(HOME, Vec3::zeros(), true, 2.0, 1, None);
+        let fresh = background(&images, &rope);
+        // A bigger frame (more levels) with a rope elsewhere, then this one.
+        let big = CameraIntrinsics {
+            width: 640,
+            height: 480,
+            ..CAMERA
+        };
+        let (rgb, depth) = (vec![90u8; 640 * 480 * 3], vec![700u16; 640 * 480]);
+        let other = Frame::new(640, 480, &rgb, &depth, 0.001).expect("frame");
+        let mut wide_rope = Mask::new(640, 480);
+        wide_rope.data[640 * 200..640 * 260].fill(true);
+        let mut reused = BackgroundView::new(&other, &big, &wide_rope, &[], (0.1, 3.0));
+        let frame =
+            Frame::new(CAMERA.width, CAMERA.height, &images.0, &images.1, 0.001).expect("frame");
+        reused.rebuild(&frame, &CAMERA, &rope, &[], (0.1, 3.0));
+        assert_eq!(reused.levels, fresh.levels);
+        assert_eq!(reused.noise, fresh.noise);
+        // The rope and a block round it are not background.
+        let finest = &fresh.levels[0];
+        assert!(!finest.background[99 * finest.width + 39]);
+        assert!(finest.background[98 * finest.width + 39]);
+        assert!(!finest.background[110 * finest.width + 200]);
+        assert!(finest.background[111 * finest.width + 201]);
     }
 }

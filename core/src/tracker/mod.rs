@@ -278,6 +278,9 @@ pub struct Tracker {
     hint: Option<Vec2>,
     /// The last frame's background, for the camera's motion since.
     background: Option<BackgroundView>,
+    /// A view whose storage the next frame's is built in (a view is a few
+    /// megabytes: allocated afresh every frame it costs page faults).
+    spare_view: BackgroundView,
     /// The camera's motion was given for the next frame (`move_camera`).
     camera_given: bool,
     /// The camera's motion estimated on the last frame.
@@ -308,6 +311,7 @@ impl Tracker {
             prior: RopePrior::default(),
             hint: None,
             background: None,
+            spare_view: BackgroundView::default(),
             camera_given: false,
             camera_motion: None,
         })
@@ -366,9 +370,11 @@ impl Tracker {
         self.camera_motion = None;
         if !self.params.follow_camera {
             self.background = None;
+            self.spare_view = BackgroundView::default();
             return;
         }
-        let view = BackgroundView::new(
+        let mut view = core::mem::take(&mut self.spare_view);
+        view.rebuild(
             frame,
             &self.camera,
             &obs.mask,
@@ -384,7 +390,9 @@ impl Tracker {
             self.carry_state(&m.motion);
         }
         self.camera_given = false;
-        self.background = Some(view);
+        if let Some(last) = self.background.replace(view) {
+            self.spare_view = last;
+        }
     }
 
     /// The rope prior in force.
@@ -520,7 +528,9 @@ impl Tracker {
     /// The next frame is not the last one's successor (a reset, a
     /// snapshot restored): no camera motion is estimated across them.
     fn forget_background(&mut self) {
-        self.background = None;
+        if let Some(last) = self.background.take() {
+            self.spare_view = last;
+        }
         self.camera_given = false;
         self.camera_motion = None;
     }
