@@ -64,6 +64,17 @@ const MAX_ITERATIONS: usize = 12;
 /// An update moving the background by less than this (pixels of the
 /// level) ends the level's iterations.
 const CONVERGED_PX: f64 = 0.01;
+/// On a coarser level, an update moving the background by less than this
+/// (pixels of the level) ends its iterations: the level only has to bring
+/// the motion within the next one's reach, which then refines it.
+const COARSE_CONVERGED_PX: f64 = 0.1;
+/// On a coarser level, an update predicted to explain the images better
+/// by less than this (twice the robust loss, in units of the residuals'
+/// variance: one unit of chi-square) ends its iterations too: the images
+/// cannot tell it from none. (Tried at the finest level as well: as fast,
+/// but the estimates moved by up to their noise and three report seeds
+/// with them.)
+const CONVERGED_GAIN: f64 = 1.0;
 /// The Cauchy loss's scale in robust standard deviations of the residuals
 /// (95 % efficiency on Gaussian noise). A redescending loss: a box or a
 /// hand moving over the table weighs next to nothing once the still
@@ -493,19 +504,20 @@ fn templates(level: &Level, noise: f64, plane: &Plane, focal: f64) -> Vec<Templa
             // The cell's strongest valid pixel and its first: when these
             // are on the plane (nearly always) they are the answer, found
             // without asking every pixel.
-            let (mut strongest, mut first) = (None::<(f32, usize, usize)>, None);
+            let (mut strongest, mut at, mut first) = (-1.0f32, (0, 0), None);
             for v in rows.clone() {
                 for u in columns.clone() {
                     let i = v * w + u;
-                    if valid(i) {
-                        first = first.or(Some((u, v)));
-                        let g = g2(i);
-                        if strongest.is_none_or(|b| g > b.0) {
-                            strongest = Some((g, u, v));
-                        }
+                    let g = if valid(i) { g2(i) } else { -1.0 };
+                    if g >= 0.0 && first.is_none() {
+                        first = Some((u, v));
+                    }
+                    if g > strongest {
+                        (strongest, at) = (g, (u, v));
                     }
                 }
             }
+            let strongest = (strongest >= 0.0).then_some((strongest, at.0, at.1));
             let mut best = strongest.filter(|&(g, u, v)| g >= floor2 && stencil(u, v));
             let mut plain = first.filter(|&(u, v)| on(u, v));
             let textured = strongest.is_some_and(|(g, _, _)| g >= floor2);
@@ -746,9 +758,10 @@ fn loss((b, d): &Row, (sb, sd): (f64, f64)) -> f64 {
     b.map_or(0.0, |(rb, _)| cauchy_loss(rb / sb)) + d.map_or(0.0, |(rd, _)| cauchy_loss(rd / sd))
 }
 
-/// One Gauss-Newton update of `motion`, or `None` when the normal
-/// equations cannot be solved.
-fn update(rows: &Rows, (sb, sd): (f64, f64)) -> Option<SVector<f64, 6>> {
+/// One Gauss-Newton update of `motion` and how much it is predicted to
+/// lower the robust loss (twice, in units of the residuals' variance), or
+/// `None` when the normal equations cannot be solved.
+fn update(rows: &Rows, (sb, sd): (f64, f64)) -> Option<(SVector<f64, 6>, f64)> {
     let mut a = SMatrix::<f64, 6, 6>::zeros();
     let mut g = SVector::<f64, 6>::zeros();
     let mut add = |r: f64, j: &SVector<f64, 6>, s: f64| {
@@ -773,7 +786,8 @@ fn update(rows: &Rows, (sb, sd): (f64, f64)) -> Option<SVector<f64, 6>> {
     }
     a += SMatrix::<f64, 6, 6>::identity() * (RIDGE * scale);
     let x = -a.cholesky()?.solve(&g);
-    x.iter().all(|v| v.is_finite()).then_some(x)
+    let predicted = -g.dot(&x);
+    x.iter().all(|v| v.is_finite()).then_some((x, predicted))
 }
 
 /// The camera's estimated motion between two frames.
@@ -818,7 +832,7 @@ pub fn camera_motion(earlier: &BackgroundView, later: &BackgroundView) -> Option
             if rows.iter().flatten().count() < MIN_POINTS {
                 break;
             }
-            let Some(x) = update(&rows, spreads(&rows)) else {
+            let Some((x, predicted)) = update(&rows, spreads(&rows)) else {
                 break;
             };
             let (v, w) = (Vec3::new(x[0], x[1], x[2]), Vec3::new(x[3], x[4], x[5]));
@@ -827,7 +841,15 @@ pub fn camera_motion(earlier: &BackgroundView, later: &BackgroundView) -> Option
                 rotation: turn * motion.rotation,
                 translation: turn * motion.translation + v,
             };
-            if l.fx * (v.norm() / depth + w.norm()) < CONVERGED_PX {
+            // The finest level refines to CONVERGED_PX; a coarser one
+            // stops once the next can take over.
+            let shift = l.fx * (v.norm() / depth + w.norm());
+            let converged = if k == 0 {
+                shift < CONVERGED_PX
+            } else {
+                shift < COARSE_CONVERGED_PX || predicted < CONVERGED_GAIN
+            };
+            if converged {
                 break;
             }
         }
