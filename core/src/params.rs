@@ -75,7 +75,7 @@ pub struct Params {
     /// world when the camera is on an arm or in a hand. Shared by every
     /// algorithm. Default false, for its cost only: it helps both randomised
     /// ranges (report range median 3.05 -> 2.37 mm, p90 11.51 -> 8.96) but
-    /// costs 2.3-2.7 ms a frame (see `docs/algorithm-notes.md`, "The
+    /// adds about 1.5 ms a frame (see `docs/algorithm-notes.md`, "The
     /// camera's own motion"). Turn it on when the camera moves.
     /// [`crate::Tracker::move_camera`] takes a known motion instead.
     pub follow_camera: bool,
