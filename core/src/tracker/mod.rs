@@ -10,7 +10,7 @@ use crate::math::{self, Vec2, Vec3};
 use crate::motion::RigidMotion;
 use crate::params::{Params, ParamsError};
 use crate::perception::camera::{CameraError, CameraIntrinsics};
-use crate::perception::ego_motion::{camera_motion, BackgroundView, CameraMotion};
+use crate::perception::ego_motion::CameraMotion;
 use crate::perception::evidence::Evidence;
 use crate::perception::frame::{Frame, FrameError};
 use crate::perception::initialisation::{
@@ -29,7 +29,9 @@ use crate::upe::registration::EmReport;
 use crate::upe::UpeTrackStep;
 use crate::visibility::{classify_nodes, visible_nodes_relative, NodeVisibility};
 
+mod camera;
 mod stepper;
+use camera::CameraFollowing;
 pub use stepper::{StepReports, Stepper};
 
 /// A tracked rope longer than this multiple of its length at
@@ -276,15 +278,8 @@ pub struct Tracker {
     prior: RopePrior,
     /// A pixel on the rope the user clicked, for the next initialisation.
     hint: Option<Vec2>,
-    /// The last frame's background, for the camera's motion since.
-    background: Option<BackgroundView>,
-    /// A view whose storage the next frame's is built in (a view is a few
-    /// megabytes: allocated afresh every frame it costs page faults).
-    spare_view: BackgroundView,
-    /// The camera's motion was given for the next frame (`move_camera`).
-    camera_given: bool,
-    /// The camera's motion estimated on the last frame.
-    camera_motion: Option<CameraMotion>,
+    /// The camera's own motion: the last background, told or estimated.
+    following: CameraFollowing,
 }
 
 impl Tracker {
@@ -310,10 +305,7 @@ impl Tracker {
             stepper: Stepper::new(params.algorithm),
             prior: RopePrior::default(),
             hint: None,
-            background: None,
-            spare_view: BackgroundView::default(),
-            camera_given: false,
-            camera_motion: None,
+            following: CameraFollowing::default(),
         })
     }
 
@@ -343,7 +335,7 @@ impl Tracker {
         if let Some(reason) = reason {
             return Err(TrackerError::CameraMotion { reason });
         }
-        self.camera_given = true;
+        self.following.given = true;
         self.carry_state(motion);
         Ok(())
     }
@@ -360,38 +352,17 @@ impl Tracker {
     /// The camera's motion estimated from the background on the last
     /// frame (`follow_camera`), when one was significant.
     pub fn camera_motion(&self) -> Option<&CameraMotion> {
-        self.camera_motion.as_ref()
+        self.following.estimated.as_ref()
     }
 
     /// With `follow_camera`: the camera's motion from the last frame's
     /// background to `frame`'s, applied to the state (unless the caller
     /// gave it), and `frame`'s background kept for the next.
     fn follow_camera(&mut self, frame: &Frame<'_>, obs: &Observation) {
-        self.camera_motion = None;
-        if !self.params.follow_camera {
-            self.background = None;
-            self.spare_view = BackgroundView::default();
-            return;
-        }
-        let mut view = core::mem::take(&mut self.spare_view);
-        view.rebuild(
-            frame,
-            &self.camera,
-            &obs.mask,
-            &obs.occlusions,
-            (self.params.min_depth, self.params.max_depth),
-        );
-        if !self.camera_given && self.state.is_some() {
-            if let Some(last) = &self.background {
-                self.camera_motion = camera_motion(last, &view);
-            }
-        }
-        if let Some(m) = self.camera_motion {
-            self.carry_state(&m.motion);
-        }
-        self.camera_given = false;
-        if let Some(last) = self.background.replace(view) {
-            self.spare_view = last;
+        let tracking = self.state.is_some();
+        let following = &mut self.following;
+        if let Some(m) = following.follow(frame, obs, &self.camera, &self.params, tracking) {
+            self.carry_state(&m);
         }
     }
 
@@ -447,7 +418,7 @@ impl Tracker {
             let nodes = self.nodes().to_vec();
             self.stepper.start(&nodes);
         }
-        self.forget_background();
+        self.following.forget();
         Ok(())
     }
 
@@ -522,17 +493,7 @@ impl Tracker {
         self.refused_jump_cloud = None;
         self.recovery = RecoveryBackoff::default();
         self.stepper = Stepper::new(self.params.algorithm);
-        self.forget_background();
-    }
-
-    /// The next frame is not the last one's successor (a reset, a
-    /// snapshot restored): no camera motion is estimated across them.
-    fn forget_background(&mut self) {
-        if let Some(last) = self.background.take() {
-            self.spare_view = last;
-        }
-        self.camera_given = false;
-        self.camera_motion = None;
+        self.following.forget();
     }
 
     /// Segmentation and point cloud of `frame`, with `occlusions` blacked out.
