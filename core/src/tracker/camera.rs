@@ -7,8 +7,7 @@ use crate::params::Params;
 use crate::perception::camera::CameraIntrinsics;
 use crate::perception::ego_motion::{camera_motion, BackgroundView, CameraMotion};
 use crate::perception::frame::Frame;
-
-use super::Observation;
+use crate::perception::segmentation::{Mask, Rect};
 
 /// The camera-following state of a tracker.
 #[derive(Debug, Clone, Default)]
@@ -26,13 +25,13 @@ pub(super) struct CameraFollowing {
 
 impl CameraFollowing {
     /// With `params.follow_camera`: the camera's motion from the last
-    /// frame's background to `frame`'s (unless the caller gave it, or
-    /// there is no state to move), and `frame`'s background kept for the
-    /// next.
+    /// frame's background to `frame`'s (the `rope` mask and the declared
+    /// `occluders` left out; none when the caller gave it, or there is no
+    /// state to move), and `frame`'s background kept for the next.
     pub(super) fn follow(
         &mut self,
         frame: &Frame<'_>,
-        obs: &Observation,
+        (rope, occluders): (&Mask, &[Rect]),
         camera: &CameraIntrinsics,
         params: &Params,
         tracking: bool,
@@ -44,7 +43,7 @@ impl CameraFollowing {
         }
         let mut view = core::mem::take(&mut self.spare);
         let depth_range = (params.min_depth, params.max_depth);
-        view.rebuild(frame, camera, &obs.mask, &obs.occlusions, depth_range);
+        view.rebuild(frame, camera, rope, occluders, depth_range);
         if !self.given && tracking {
             if let Some(last) = &self.background {
                 self.estimated = camera_motion(last, &view);

@@ -361,7 +361,8 @@ impl Tracker {
     fn follow_camera(&mut self, frame: &Frame<'_>, obs: &Observation) {
         let tracking = self.state.is_some();
         let following = &mut self.following;
-        if let Some(m) = following.follow(frame, obs, &self.camera, &self.params, tracking) {
+        let background = (&obs.mask, obs.occlusions.as_slice());
+        if let Some(m) = following.follow(frame, background, &self.camera, &self.params, tracking) {
             self.carry_state(&m);
         }
     }
