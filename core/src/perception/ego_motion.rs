@@ -1086,6 +1086,35 @@ mod tests {
     }
 
     #[test]
+    fn frames_of_any_size_give_no_motion_rather_than_a_panic() {
+        for (w, h) in [
+            (1u32, 1u32),
+            (3, 2),
+            (2, 3),
+            (1280, 3),
+            (3, 1280),
+            (641, 17),
+        ] {
+            let camera = CameraIntrinsics {
+                width: w,
+                height: h,
+                fx: 300.0,
+                fy: 300.0,
+                cx: w as f64 / 2.0,
+                cy: h as f64 / 2.0,
+            };
+            let n = (w * h) as usize;
+            let (rgb, depth) = (vec![128u8; 3 * n], vec![800u16; n]);
+            let frame = Frame::new(w, h, &rgb, &depth, 0.001).expect("frame");
+            let rope = Mask::new(w, h);
+            let a = BackgroundView::new(&frame, &camera, &rope, &[], (0.1, 3.0));
+            let mut b = a.clone();
+            b.rebuild(&frame, &camera, &rope, &[], (0.1, 3.0));
+            assert_eq!(camera_motion(&a, &b), None, "{w}x{h}");
+        }
+    }
+
+    #[test]
     fn too_little_background_gives_no_motion() {
         let mut rope = no_rope();
         rope.data.iter_mut().for_each(|m| *m = true);
