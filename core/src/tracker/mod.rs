@@ -15,7 +15,7 @@ use crate::perception::evidence::Evidence;
 use crate::perception::frame::{Frame, FrameError};
 use crate::perception::initialisation::{
     initialise, InitError, InitGuide, InitReport, Initialisation, PriorError, RopePrior,
-    DIAMETER_PRIOR_FACTOR,
+    DIAMETER_PRIOR_FACTOR, JOIN_DIAMETER_RATIO,
 };
 use crate::perception::point_cloud::build_cloud;
 use crate::perception::segmentation::{
@@ -208,6 +208,8 @@ pub struct TrackerSnapshot {
     #[cfg_attr(feature = "serde", serde(default))]
     known_radius: Option<f64>,
     #[cfg_attr(feature = "serde", serde(default))]
+    known_diameter: Option<f64>,
+    #[cfg_attr(feature = "serde", serde(default))]
     rest_length: Option<f64>,
     #[cfg_attr(feature = "serde", serde(default))]
     refused_jump_cloud: Option<usize>,
@@ -264,6 +266,9 @@ pub struct Tracker {
     known_length: Option<f64>,
     /// Radius measured at the first initialisation, metres.
     known_radius: Option<f64>,
+    /// The rope's diameter as the first initialisation measured it (the
+    /// candidate taken), metres: what a recovery must find again.
+    known_diameter: Option<f64>,
     /// Length of the node polyline at the first initialisation, metres
     /// (chords, as the tracked nodes measure it).
     rest_length: Option<f64>,
@@ -299,6 +304,7 @@ impl Tracker {
             state: None,
             known_length: None,
             known_radius: None,
+            known_diameter: None,
             rest_length: None,
             refused_jump_cloud: None,
             recovery: RecoveryBackoff::default(),
@@ -436,6 +442,7 @@ impl Tracker {
             state: self.state.clone(),
             known_length: self.known_length,
             known_radius: self.known_radius,
+            known_diameter: self.known_diameter,
             rest_length: self.rest_length,
             refused_jump_cloud: self.refused_jump_cloud,
             recovery: self.recovery,
@@ -458,6 +465,7 @@ impl Tracker {
         let lengths = [
             snapshot.known_length,
             snapshot.known_radius,
+            snapshot.known_diameter,
             snapshot.rest_length,
         ];
         if lengths.iter().flatten().any(|l| !l.is_finite() || *l < 0.0) {
@@ -473,6 +481,7 @@ impl Tracker {
         });
         self.known_length = snapshot.known_length;
         self.known_radius = snapshot.known_radius;
+        self.known_diameter = snapshot.known_diameter;
         self.rest_length = snapshot.rest_length;
         self.refused_jump_cloud = snapshot.refused_jump_cloud;
         self.recovery = snapshot.recovery;
@@ -490,6 +499,7 @@ impl Tracker {
         self.state = None;
         self.known_length = None;
         self.known_radius = None;
+        self.known_diameter = None;
         self.rest_length = None;
         self.refused_jump_cloud = None;
         self.recovery = RecoveryBackoff::default();
@@ -610,9 +620,10 @@ impl Tracker {
         let out = self.stepper.step(&input, &self.params);
         if self.contradicts_evidence(&out.nodes, &obs.cloud, &out.report) {
             if self.recovery.may_recover() {
-                let attempt = self.try_initialise(frame, obs);
+                let attempt = self.find_rope(frame, obs).ok();
                 self.recovery.recovered();
-                if let Ok(mut again) = attempt {
+                if let Some(init) = attempt.filter(|init| self.as_thick_as_tracked(init)) {
+                    let mut again = self.adopt(init, frame, obs);
                     again.status = FrameStatus::Recovered;
                     return again;
                 }
@@ -751,11 +762,24 @@ impl Tracker {
         Ok(init)
     }
 
+    /// Whether `init` found a rope as thick as the one tracked (the
+    /// diameters the initialisation measures, within the factor its
+    /// fragments are joined with): a recovery replaces a state that
+    /// contradicts the images with the same rope only, not with a box's
+    /// dark edge beside it (drawn scene 1032).
+    fn as_thick_as_tracked(&self, init: &Initialisation) -> bool {
+        match (init.diameter(), self.known_diameter) {
+            (Some(a), Some(b)) => a.max(b) <= JOIN_DIAMETER_RATIO * a.min(b),
+            _ => true,
+        }
+    }
+
     /// Takes `init` as the state.
     fn adopt(&mut self, init: Initialisation, frame: &Frame<'_>, obs: &Observation) -> FrameOutput {
         if self.known_length.is_none() {
             self.known_length = Some(init.length);
             self.known_radius = init.radius;
+            self.known_diameter = init.diameter();
             self.rest_length = Some(crate::upe::length::rest_length(
                 polyline_length(&init.nodes),
                 self.radius(),

@@ -28,7 +28,8 @@ const TANGENT_WIDTHS: f64 = 2.0;
 /// Fewest cells a direction is measured over (pixel steps are 45 degrees apart).
 const MIN_TANGENT_CELLS: usize = 4;
 /// Largest turn, degrees, a rope is followed through a junction with: a
-/// crossing goes straight on; at a T the stem's rope ends there.
+/// crossing goes straight on; at a T the stem's rope ends there. (A zone
+/// left with two branches has nothing to choose: no limit there.)
 pub const MAX_CROSSING_TURN_DEGREES: f64 = 60.0;
 
 /// What a branch end attaches to.
@@ -414,9 +415,16 @@ impl SkeletonGraph {
         (t.at[e], -t.out[e])
     }
 
+    /// Branch ends at zone `z`.
+    fn degree(&self, z: usize) -> usize {
+        let ends = self.branches.iter().flat_map(|b| b.ends);
+        ends.filter(|&e| e == End::Zone(z)).count()
+    }
+
     /// The walk from `start` on, never reusing a branch of `used`: at each
     /// zone the unused branch the rope bends least into, if the bend is at
-    /// most [`MAX_CROSSING_TURN_DEGREES`].
+    /// most [`MAX_CROSSING_TURN_DEGREES`] (any bend at a zone of two
+    /// branches).
     fn walk_from(&self, start: Leg, used: &[bool]) -> (Vec<Leg>, f64) {
         let mut used = used.to_vec();
         used[start.branch] = true;
@@ -430,6 +438,14 @@ impl SkeletonGraph {
             };
             let (p_in, d_in) = self.arriving(last);
             let mut best: Option<(f64, Leg, f64)> = None;
+            // A zone left with two branches (a spur pruned from a tight
+            // bend: a ragged edge, glare) offers no strand to choose: the
+            // rope goes on round it however sharply it turns.
+            let limit = if self.degree(z) == 2 {
+                core::f64::consts::PI
+            } else {
+                limit
+            };
             for (b, branch) in self.branches.iter().enumerate() {
                 if used[b] {
                     continue;

@@ -150,6 +150,17 @@ pub struct Initialisation {
     pub report: InitReport,
 }
 
+impl Initialisation {
+    /// The diameter of the candidate taken, as the rope test measured it
+    /// (median width at its median depth), metres.
+    pub fn diameter(&self) -> Option<f64> {
+        self.report
+            .candidates
+            .get(self.report.chosen)
+            .map(|c| c.diameter)
+    }
+}
+
 /// Smallest radius an estimate may give, metres (a thread).
 pub const MIN_ESTIMATED_RADIUS: f64 = 0.0005;
 /// Largest radius an estimate may give, metres (a hose).
