@@ -81,37 +81,35 @@ fn from_background(seed: u64) -> f64 {
     after_occlusion_of(seed, params, Told::ByParams)
 }
 
+/// Prints both errors and checks that `got` (mm, the camera's motion
+/// taken `how`) is below `bound` mm and below `share` of `held`.
+fn assert_below(held: f64, got: f64, how: &str, (bound, share): (f64, f64)) {
+    eprintln!("after occlusion: {held:.2} mm held, {got:.2} mm {how}");
+    assert!(got < bound && got < share * held, "{held:.2} / {got:.2} mm");
+}
+
 #[test]
 fn a_camera_on_an_arm_does_not_leave_the_hidden_rope_behind_when_followed() {
     let held = held();
     let mut followed = Params::default();
     followed.upetrack.follow_shared_motion = true;
     let followed = after_occlusion(followed, Told::ByParams);
-    eprintln!("after occlusion: {held:.2} mm held, {followed:.2} mm followed");
-    assert!(
-        followed < 3.0 && followed < 0.5 * held,
-        "{held:.2} / {followed:.2} mm"
-    );
+    assert_below(held, followed, "followed", (3.0, 0.5));
 }
 
 #[test]
 fn a_known_camera_motion_keeps_the_hidden_rope_where_it_lies() {
     let held = held();
     let told = after_occlusion(Params::default(), Told::Truth);
-    eprintln!("after occlusion: {held:.2} mm held, {told:.2} mm told the camera's motion");
-    assert!(told < 2.0 && told < 0.3 * held, "{held:.2} / {told:.2} mm");
+    assert_below(held, told, "told the camera's motion", (2.0, 0.3));
 }
 
 #[test]
 fn a_camera_on_an_arm_is_followed_from_the_background() {
     let held = held();
     let followed = from_background(ARM_SEED);
-    eprintln!("after occlusion: {held:.2} mm held, {followed:.2} mm from the background");
     // 1.46 mm when the view was read at 160 px from each block's centre.
-    assert!(
-        followed < 1.4 && followed < 0.3 * held,
-        "{held:.2} / {followed:.2} mm"
-    );
+    assert_below(held, followed, "from the background", (1.4, 0.3));
 }
 
 #[test]
@@ -125,9 +123,5 @@ fn a_handheld_camera_at_1280x720_does_not_leave_the_hidden_rope_behind() {
     ));
     let held = after_occlusion_of(HANDHELD_SEED, Params::default(), Told::ByParams);
     let followed = from_background(HANDHELD_SEED);
-    eprintln!("after occlusion: {held:.2} mm held, {followed:.2} mm from the background");
-    assert!(
-        followed < 2.0 && followed < 0.3 * held,
-        "{held:.2} / {followed:.2} mm"
-    );
+    assert_below(held, followed, "from the background", (2.0, 0.3));
 }

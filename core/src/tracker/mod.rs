@@ -14,8 +14,8 @@ use crate::perception::ego_motion::CameraMotion;
 use crate::perception::evidence::Evidence;
 use crate::perception::frame::{Frame, FrameError};
 use crate::perception::initialisation::{
-    initialise, InitError, InitGuide, InitReport, Initialisation, PriorError, RopePrior,
-    DIAMETER_PRIOR_FACTOR, JOIN_DIAMETER_RATIO,
+    initialise, one_rope_thick, InitError, InitGuide, InitReport, Initialisation, PriorError,
+    RopePrior, DIAMETER_PRIOR_FACTOR,
 };
 use crate::perception::point_cloud::build_cloud;
 use crate::perception::segmentation::{
@@ -769,7 +769,7 @@ impl Tracker {
     /// dark edge beside it (drawn scene 1032).
     fn as_thick_as_tracked(&self, init: &Initialisation) -> bool {
         match (init.diameter(), self.known_diameter) {
-            (Some(a), Some(b)) => a.max(b) <= JOIN_DIAMETER_RATIO * a.min(b),
+            (Some(a), Some(b)) => one_rope_thick(a, b),
             _ => true,
         }
     }

@@ -54,6 +54,12 @@ pub const JOIN_GAP_DIAMETERS: f64 = 6.0;
 pub const JOIN_GAP_FRACTION: f64 = 0.5;
 /// Largest ratio of two fragments' diameters for them to be one rope.
 pub const JOIN_DIAMETER_RATIO: f64 = 1.6;
+
+/// Whether two measured diameters can be one rope's (within
+/// [`JOIN_DIAMETER_RATIO`]; `false` for an unmeasured one).
+pub fn one_rope_thick(a: f64, b: f64) -> bool {
+    a.max(b) / a.min(b) <= JOIN_DIAMETER_RATIO
+}
 /// Fewest points a piece must have to be measured at all.
 const MIN_PIECE_POINTS: usize = 4;
 /// Longest extension of a skeleton end towards its shape's tip, pixels.
@@ -486,8 +492,7 @@ pub(super) fn join(pieces: &[Piece], metric: bool) -> Vec<Chain> {
     for a in 0..n {
         for b in a + 1..n {
             let (pa, pb) = (&pieces[a], &pieces[b]);
-            let ratio = pa.diameter.max(pb.diameter) / pa.diameter.min(pb.diameter);
-            if !(ratio <= JOIN_DIAMETER_RATIO) {
+            if !one_rope_thick(pa.diameter, pb.diameter) {
                 continue;
             }
             let reach = (JOIN_GAP_DIAMETERS * pa.diameter.min(pb.diameter))
