@@ -9,12 +9,11 @@
 use upetrack::perception::initialisation::Candidate;
 use upetrack::polyline::polyline_length;
 use upetrack::{Algorithm, Params, Tracker};
-use upetrack_io::{FolderSource, Sequence};
 use upetrack_synth::{ScenarioKind, Variant};
 
 mod common;
-use common::run;
 use common::scenes::{each_frame, max};
+use common::{frame_errors, run, written_drawn_scene};
 
 /// The candidate taken on the first frame, the true length there, and
 /// every frame's error in millimetres.
@@ -184,30 +183,6 @@ fn a_thin_distractor_beside_the_rope_does_not_pull_its_end_nodes() {
     assert!(max(&errors) < 4.0, "worst frame {:.1} mm", max(&errors));
 }
 
-/// Drawn scene `seed` of the randomised benchmark written with
-/// `upetrack synth random` (colour as JPEG, as users' recordings are):
-/// its sequence and the drawn rope's length.
-fn written_drawn_scene(seed: u64, frames: usize) -> (Sequence<FolderSource>, f64) {
-    let dir = common::temp_dir("finding", &format!("drawn-{seed}"));
-    let (seed, frames) = (seed.to_string(), frames.to_string());
-    let path = dir.to_str().expect("utf-8");
-    let out = run(&[
-        "synth", "random", path, "--seed", &seed, "--frames", &frames,
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let scene = std::fs::read_to_string(dir.join("scene.json")).expect("scene.json");
-    let draw: serde_json::Value = serde_json::from_str(&scene).expect("json");
-    let length = draw["rope"]["length_m"].as_f64().expect("rope length");
-    (
-        Sequence::open(FolderSource::new(&dir)).expect("opens"),
-        length,
-    )
-}
-
 /// Regression for "a white twisted rope in a JPEG frame is found in six
 /// pieces" (drawn scene 1015 of the tuning range: a 0.87 m rope in a tight
 /// wave at 1280x720): the mask is one shape, but its ragged edges leave
@@ -237,17 +212,6 @@ fn a_twisted_white_rope_in_a_jpeg_frame_is_found_round_its_tight_bends() {
 #[test]
 fn a_recovery_does_not_take_a_boxs_dark_edge_for_the_rope() {
     let (seq, _) = written_drawn_scene(1032, 48);
-    let mut tracker = Tracker::new(Params::default(), seq.camera, seq.hsv).expect("tracker");
-    let mut worst: f64 = 0.0;
-    for k in 0..seq.groundtruth.len() {
-        let decoded = seq.frame(k).expect("frame");
-        let frame = decoded.frame(seq.depth_scale).expect("frame");
-        let out = tracker
-            .process(&frame, &seq.occlusions_at(k))
-            .expect("frame");
-        let truth = seq.groundtruth[k].as_ref().expect("ground truth");
-        let e = upetrack::metrics::frame_error(&out.nodes, truth).expect("error") * 1000.0;
-        worst = worst.max(e);
-    }
+    let worst = max(&frame_errors(&seq));
     assert!(worst < 20.0, "worst frame {worst:.1} mm");
 }

@@ -9,14 +9,19 @@ use upetrack_synth::{ScenarioKind, Variant};
 
 mod common;
 use common::scenes::{each_frame, max, mean, track_scenario};
+use common::{frame_errors, written_drawn_scene};
 
 /// Regression for "a hidden tip creeps out of its occluder while the rope
 /// rests" (TrackDLO's protocol with 40 and 60 % of the rope hidden): EM
 /// pulled the visible node at the occlusion's edge along the rope, away
 /// from the edge, by about a third of a node spacing every frame, and the
 /// occlusion estimate passed that on to the hidden tip, which slid out past
-/// the rope's end or bent off its curve. With the anchors keeping only
-/// their move across the rope (`anchor_across_only`) it stays put.
+/// the rope's end or bent off its curve: 2.45 and 2.35 mm. The anchors
+/// keeping only their move across the rope (`anchor_across_only`) stopped
+/// it (1.23 and 1.03 mm); since hidden nodes slide on the rope's smooth
+/// curve the pull no longer cuts the tip's bend either, and the rule is no
+/// longer what holds it (1.06 mm with it, 1.15 without on sweep-40). Both
+/// must stay below the creep's figures.
 #[test]
 fn a_hidden_tip_does_not_creep_out_of_its_occluder_while_the_rope_rests() {
     for percent in [40, 60] {
@@ -29,10 +34,10 @@ fn a_hidden_tip_does_not_creep_out_of_its_occluder_while_the_rope_rests() {
         eprintln!(
             "sweep-{percent}: occluded mean {held:.2} mm, anchors moved along too {pulled:.2} mm"
         );
-        assert!(held < 3.0, "sweep-{percent}: {held:.2} mm");
+        assert!(held < 1.5, "sweep-{percent}: {held:.2} mm");
         assert!(
-            held < 0.7 * pulled,
-            "sweep-{percent}: {held:.2} vs {pulled:.2} mm"
+            pulled < 1.8,
+            "sweep-{percent}, anchors moved along: {pulled:.2} mm"
         );
     }
 }
@@ -103,4 +108,21 @@ fn a_rope_pulled_through_an_occluder_keeps_its_length_and_tightens_the_hidden_be
     assert!(max(&lengths) < 0.04, "{:.3}", max(&lengths));
     assert!(mean(&kept) < 0.9 * mean(&grown));
     assert!(mean(&kept) < 0.7 * mean(&trackdlo));
+}
+
+/// Regression for "a hidden wave unrolls while the rope rests" (drawn
+/// scene 1072 of the tuning range, written as users' files are: a 1.02 m
+/// rope in a wave of two periods, a box sliding over 69 % of it, its hidden
+/// end lifted 9 cm, a handheld camera). Only six nodes stay visible; the
+/// hidden eighteen were slid and re-spaced every frame along the chords
+/// between them, each move cutting the wave's bends, until the run lay
+/// straight and its tip was 20 cm out of place: 80 mm at the last frame.
+/// On the smooth curve through the nodes it keeps the wave (18.8 mm at
+/// worst, at the lift's height).
+#[test]
+fn a_hidden_wave_does_not_unroll_when_its_nodes_slide_and_are_re_spaced() {
+    let (seq, _) = written_drawn_scene(1072, 48);
+    let errors = frame_errors(&seq);
+    let worst = max(&errors);
+    assert!(worst < 30.0, "worst frame {worst:.1} mm");
 }

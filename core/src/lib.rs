@@ -47,6 +47,7 @@ extern crate alloc;
 extern crate std;
 
 pub mod baselines;
+pub mod curve;
 pub mod math;
 pub mod metrics;
 pub mod motion;

@@ -4,6 +4,9 @@
 
 use std::path::PathBuf;
 
+use upetrack::{Params, Tracker};
+use upetrack_io::{FolderSource, Sequence};
+
 pub mod scenes;
 
 /// A fresh temporary folder for one test (`prefix` names the test file).
@@ -38,4 +41,45 @@ pub fn synth(scenario: &str, frames: usize, dir: &std::path::Path) {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+}
+
+/// Drawn scene `seed` of the randomised benchmark written with
+/// `upetrack synth random` (colour as JPEG, as users' recordings are):
+/// its sequence and the drawn rope's length.
+pub fn written_drawn_scene(seed: u64, frames: usize) -> (Sequence<FolderSource>, f64) {
+    let dir = temp_dir("drawn", &seed.to_string());
+    let (seed, frames) = (seed.to_string(), frames.to_string());
+    let path = dir.to_str().expect("utf-8");
+    let out = run(&[
+        "synth", "random", path, "--seed", &seed, "--frames", &frames,
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let scene = std::fs::read_to_string(dir.join("scene.json")).expect("scene.json");
+    let draw: serde_json::Value = serde_json::from_str(&scene).expect("json");
+    let length = draw["rope"]["length_m"].as_f64().expect("rope length");
+    (
+        Sequence::open(FolderSource::new(&dir)).expect("opens"),
+        length,
+    )
+}
+
+/// Every frame's error (mm) of `seq` tracked with the default parameters
+/// from its files.
+pub fn frame_errors(seq: &Sequence<FolderSource>) -> Vec<f64> {
+    let mut tracker = Tracker::new(Params::default(), seq.camera, seq.hsv).expect("tracker");
+    (0..seq.groundtruth.len())
+        .map(|k| {
+            let decoded = seq.frame(k).expect("frame");
+            let frame = decoded.frame(seq.depth_scale).expect("frame");
+            let out = tracker
+                .process(&frame, &seq.occlusions_at(k))
+                .expect("frame");
+            let truth = seq.groundtruth[k].as_ref().expect("ground truth");
+            upetrack::metrics::frame_error(&out.nodes, truth).expect("error") * 1000.0
+        })
+        .collect()
 }

@@ -8,7 +8,9 @@
 
 use alloc::vec::Vec;
 
+use super::resampling::resample;
 use super::slide::{hidden_runs, HiddenRun};
+use crate::curve::RopeCurve;
 use crate::math::{self, Vec3};
 use crate::polyline::polyline_length;
 
@@ -23,29 +25,8 @@ pub struct LengthReport {
 
 /// `count` points after `curve[0]` evenly spaced by `step` along `curve`,
 /// continued straight past its end.
-fn along(curve: &[Vec3], count: usize, step: f64) -> Vec<Vec3> {
-    let mut out = Vec::with_capacity(count);
-    let mut k = 0;
-    let mut travelled = 0.0;
-    for i in 1..=count {
-        let target = step * i as f64;
-        while k + 2 < curve.len() && travelled + math::norm(&(curve[k + 1] - curve[k])) < target {
-            travelled += math::norm(&(curve[k + 1] - curve[k]));
-            k += 1;
-        }
-        let (a, b) = if curve.len() >= 2 {
-            (curve[k], curve[k + 1])
-        } else {
-            (curve[0], curve[0])
-        };
-        let seg = math::norm(&(b - a));
-        out.push(if seg > math::LENGTH_EPSILON {
-            a + (b - a) * ((target - travelled) / seg)
-        } else {
-            a
-        });
-    }
-    out
+fn along(curve: &RopeCurve<'_>, count: usize, step: f64) -> Vec<Vec3> {
+    (1..=count).map(|i| curve.at(step * i as f64)).collect()
 }
 
 /// Re-spaces every hidden run that reaches an end of the rope (`known[m]`
@@ -94,7 +75,7 @@ pub fn conserve_end_lengths(nodes: &mut [Vec3], known: &[bool], rest_length: f64
         if old <= share {
             continue;
         }
-        let placed = along(&curve, count, share / count as f64);
+        let placed = along(&RopeCurve::polyline(&curve), count, share / count as f64);
         if !placed.iter().all(math::is_finite) {
             continue;
         }
@@ -269,7 +250,7 @@ pub fn resample_with_end_runs_at_rest(
     tail: usize,
     count: usize,
     rest_spacing: f64,
-    resample: &dyn Fn(&[Vec3], usize) -> Vec<Vec3>,
+    smooth: bool,
     allows: &dyn Fn(&Vec3) -> bool,
 ) -> Option<Vec<Vec3>> {
     let n = nodes.len();
@@ -277,20 +258,26 @@ pub fn resample_with_end_runs_at_rest(
     if ends == 0 || ends + 2 > count || ends + 2 > n || !(rest_spacing > 0.0) {
         return None;
     }
-    let middle = resample(&nodes[head..n - tail], count - ends);
+    let middle = resample(&nodes[head..n - tail], count - ends, smooth);
     let (&first, &last) = (middle.first()?, middle.last()?);
     let mut out = Vec::with_capacity(count);
     // Each run's curve from its anchor outwards.
     let mut head_curve = alloc::vec![first];
     head_curve.extend(nodes[..head].iter().rev().copied());
     out.extend(
-        along_within(&head_curve, head, rest_spacing, allows)
-            .into_iter()
-            .rev(),
+        along_within(
+            &RopeCurve::new(&head_curve, smooth),
+            head,
+            rest_spacing,
+            allows,
+        )
+        .into_iter()
+        .rev(),
     );
     out.extend_from_slice(&middle);
     let mut tail_curve = alloc::vec![last];
     tail_curve.extend_from_slice(&nodes[n - tail..]);
+    let tail_curve = RopeCurve::new(&tail_curve, smooth);
     out.extend(along_within(&tail_curve, tail, rest_spacing, allows));
     (out.len() == count && out.iter().all(math::is_finite)).then_some(out)
 }
@@ -300,22 +287,23 @@ pub fn resample_with_end_runs_at_rest(
 /// curve and that reach are shorter than `count` steps, the points are
 /// spread evenly over what there is.
 fn along_within(
-    curve: &[Vec3],
+    curve: &RopeCurve<'_>,
     count: usize,
     step: f64,
     allows: &dyn Fn(&Vec3) -> bool,
 ) -> Vec<Vec3> {
-    let length = polyline_length(curve);
+    let length = curve.length();
     let wanted = step * count as f64;
-    if curve.len() < 2 || length >= wanted || count == 0 {
+    let pieces = curve.pieces();
+    if pieces.len() < 2 || length >= wanted || count == 0 {
         return along(curve, count, step);
     }
-    let n = curve.len();
-    let Some(dir) = outwards(&curve[n - 1], &curve[n - 2]) else {
+    let n = pieces.len();
+    let Some(dir) = outwards(&pieces[n - 1], &pieces[n - 2]) else {
         return along(curve, count, step);
     };
     let walk = EXTENSION_STEP_SPACINGS * step;
-    let more = reach(&curve[n - 1], &dir, wanted - length, walk, allows);
+    let more = reach(&pieces[n - 1], &dir, wanted - length, walk, allows);
     along(curve, count, ((length + more) / count as f64).min(step))
 }
 
@@ -490,7 +478,7 @@ mod tests {
             Vec3::new(1.0, 2.0, 0.0),
             Vec3::new(2.0, 2.0, 0.0),
         ];
-        let out = along(&curve, 6, 0.75);
+        let out = along(&RopeCurve::polyline(&curve), 6, 0.75);
         let expect = [
             Vec3::new(0.75, 0.0, 0.0),
             Vec3::new(1.0, 0.5, 0.0),
@@ -502,7 +490,8 @@ mod tests {
         for (a, b) in out.iter().zip(&expect) {
             assert!((a - b).norm() < 1e-12, "{a:?} vs {b:?}");
         }
-        assert_eq!(along(&curve[..1], 2, 1.0), alloc::vec![curve[0]; 2]);
+        let one = RopeCurve::polyline(&curve[..1]);
+        assert_eq!(along(&one, 2, 1.0), alloc::vec![curve[0]; 2]);
     }
 
     #[test]
@@ -603,11 +592,6 @@ mod tests {
         assert_eq!((out, r), (nodes.clone(), ExtensionReport::default()));
     }
 
-    /// Polyline resampling for the tests (nodes spread evenly).
-    fn even(points: &[Vec3], count: usize) -> Vec<Vec3> {
-        crate::polyline::resample_uniform(points, count)
-    }
-
     #[test]
     fn hidden_end_runs_keep_the_rest_spacing_and_the_middle_is_spread() {
         // Ten nodes: a hidden head 0-1 compressed to 5 mm steps and bent at
@@ -620,7 +604,7 @@ mod tests {
         nodes[8] = Vec3::new(0.09, 0.0, 0.6);
         nodes[9] = Vec3::new(0.11, 0.0, 0.6);
         let out =
-            resample_with_end_runs_at_rest(&nodes, 2, 2, 10, 0.01, &even, &|_| true).expect("runs");
+            resample_with_end_runs_at_rest(&nodes, 2, 2, 10, 0.01, false, &|_| true).expect("runs");
         assert_eq!(out.len(), 10);
         // The middle (anchors 2 and 7 kept) spread evenly: 1 cm steps.
         for (i, p) in out.iter().enumerate().take(8).skip(2) {
@@ -646,7 +630,7 @@ mod tests {
     fn end_runs_without_a_middle_to_spread_are_left_to_the_resampler() {
         let nodes = line(6, 0.01);
         let f = |head, tail| {
-            resample_with_end_runs_at_rest(&nodes, head, tail, 6, 0.01, &even, &|_| true)
+            resample_with_end_runs_at_rest(&nodes, head, tail, 6, 0.01, false, &|_| true)
         };
         assert_eq!(f(0, 0), None); // nothing hidden at an end
         assert_eq!(f(3, 2), None); // one node left between the runs
@@ -655,17 +639,58 @@ mod tests {
         assert!(f(2, 2).is_some());
         // Fewer nodes than the runs and a middle need: nothing to spread.
         assert_eq!(
-            resample_with_end_runs_at_rest(&nodes[..3], 1, 1, 6, 0.01, &even, &|_| true),
+            resample_with_end_runs_at_rest(&nodes[..3], 1, 1, 6, 0.01, false, &|_| true),
             None
         );
         // A rest spacing that is not a positive length.
         for bad in [f64::NAN, 0.0, -0.01, f64::INFINITY] {
             assert_eq!(
-                resample_with_end_runs_at_rest(&nodes, 1, 0, 6, bad, &even, &|_| true),
+                resample_with_end_runs_at_rest(&nodes, 1, 0, 6, bad, false, &|_| true),
                 None,
                 "{bad}"
             );
         }
+    }
+
+    /// Regression for "a hidden wave unrolls while the rope rests" (drawn
+    /// scene 1072): a hidden end is re-spaced at the rest spacing from its
+    /// anchor every frame, while EM's noise moves the anchor a little along
+    /// the rope. Measured and placed on the run's polyline, each node moved
+    /// along a chord, inside the bend, and the bend opened frame by frame;
+    /// on the smooth curve through the nodes the run stays where it lay.
+    #[test]
+    fn a_hidden_end_re_spaced_every_frame_keeps_its_bend() {
+        // Nodes 1 cm apart along a circle of 2 cm radius; the last eight
+        // hidden, the rest spacing the arc's 1 cm.
+        let radius = 0.02;
+        let on_circle = |s: f64| {
+            let a = s / radius;
+            Vec3::new(radius * libm::cos(a), radius * libm::sin(a), 0.6)
+        };
+        let start: Vec<Vec3> = (0..12).map(|i| on_circle(0.01 * i as f64)).collect();
+        let after = |smooth: bool| {
+            let mut nodes = start.clone();
+            for frame in 0..30 {
+                // The anchor 1 mm along the rope, then back.
+                let jitter = if frame % 2 == 0 { 0.001 } else { 0.0 };
+                nodes[3] = on_circle(0.03 + jitter);
+                nodes = resample_with_end_runs_at_rest(&nodes, 0, 8, 12, 0.01, smooth, &|_| true)
+                    .expect("runs");
+            }
+            nodes
+                .iter()
+                .map(|p| (libm::hypot(p.x, p.y) - radius).abs())
+                .fold(0.0, f64::max)
+        };
+        // Polyline 9.6 mm off the bend; curve 0.6 mm (the Catmull-Rom curve
+        // is not exactly a circle at 0.5 rad a node).
+        let (flat, curved) = (after(false), after(true));
+        assert!(flat > 5e-3, "polyline: {:.2} mm off the bend", flat * 1e3);
+        assert!(
+            curved < 1.5e-3,
+            "curve: {:.2} mm off the bend",
+            curved * 1e3
+        );
     }
 
     #[test]
@@ -786,15 +811,14 @@ mod tests {
         for (k, i) in (5..8).enumerate() {
             nodes[i] = Vec3::new(0.045 + 0.005 * k as f64, 0.0, 0.6);
         }
-        let even = |p: &[Vec3], n: usize| crate::polyline::resample_uniform(p, n);
         let free =
-            resample_with_end_runs_at_rest(&nodes, 0, 3, 8, 0.01, &even, &|_| true).expect("runs");
+            resample_with_end_runs_at_rest(&nodes, 0, 3, 8, 0.01, false, &|_| true).expect("runs");
         assert!((free[7].x - 0.07).abs() < 1e-9, "{:?}", free[7]);
         // ... but not into free space beyond x = 0.062: the three nodes
         // share what there is.
         let walled = |p: &Vec3| p.x <= 0.062;
         let kept =
-            resample_with_end_runs_at_rest(&nodes, 0, 3, 8, 0.01, &even, &walled).expect("runs");
+            resample_with_end_runs_at_rest(&nodes, 0, 3, 8, 0.01, false, &walled).expect("runs");
         assert!(
             kept[7].x <= 0.062 + 1e-9 && kept[7].x > 0.055,
             "{:?}",

@@ -22,10 +22,8 @@ use length::{
 };
 use occlusion::{estimate_hidden_with_sweeps, HiddenMotion, UpeCoefficients, UpeReport};
 use registration::{register_observed, EmReport, EmSettings, MAX_EM_ITERATIONS};
-use resampling::resample_smooth;
+use resampling::resample;
 use shared_motion::shared_motion;
-
-use crate::polyline::resample_uniform;
 
 use alloc::vec::Vec;
 
@@ -383,13 +381,7 @@ fn run_step(
         }
         _ => ExtensionReport::default(),
     };
-    let resample = |points: &[Vec3], count: usize| {
-        if settings.smooth_resampling {
-            resample_smooth(points, count)
-        } else {
-            resample_uniform(points, count)
-        }
-    };
+    let smooth = settings.smooth_resampling;
     let kept = match (input.rest_length, keep_ends) {
         // No extension was added at a hidden end, so the hidden runs are
         // still the first `head` and last `tail` points. (Fewer than two
@@ -402,11 +394,11 @@ fn run_step(
                 (Some(e), true) => e.sight(p).allows_hidden(),
                 _ => true,
             };
-            resample_with_end_runs_at_rest(&nodes, head, tail, m, spacing, &resample, &allows)
+            resample_with_end_runs_at_rest(&nodes, head, tail, m, spacing, smooth, &allows)
         }
         _ => None,
     };
-    let resampled = kept.unwrap_or_else(|| resample(&nodes, m));
+    let resampled = kept.unwrap_or_else(|| resample(&nodes, m, smooth));
     if let Some(t) = trace {
         t.before_resampling = nodes;
         t.resampled = resampled.clone();

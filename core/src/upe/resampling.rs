@@ -4,92 +4,43 @@
 
 use alloc::vec::Vec;
 
-use crate::math::{self, Vec3};
+use crate::curve::RopeCurve;
+use crate::math::Vec3;
 use crate::polyline::{resample_uniform, spread};
 
-/// Pieces each node-to-node segment of the smooth curve is cut into before
-/// its polyline is resampled: at the node spacing of a rope (3-4 cm) and a
-/// bend radius of 5 cm or more, the chords of eight pieces leave under 0.1 mm
-/// between the curve and its polyline.
-pub const SMOOTH_PIECES: usize = 8;
+pub use crate::curve::SMOOTH_PIECES;
 
 /// [`resample_uniform`] along the centripetal Catmull-Rom curve through
-/// `points` instead of their polyline: the curve passes through every node,
-/// so a node that resampling leaves in place stays where it was, and one it
-/// moves along a bend stays on the bend instead of on a chord, which
-/// repeated every frame would straighten the bend (`docs/algorithm-notes.md`,
-/// "Resampling"). The ends are continued straight for the curve's first and
-/// last pieces. Fewer than three points, or a curve that is not finite,
-/// fall back to the polyline.
+/// `points` instead of their polyline (`crate::curve::RopeCurve`): the
+/// curve passes through every node, so a node that resampling leaves in
+/// place stays where it was, and one it moves along a bend stays on the
+/// bend instead of on a chord, which repeated every frame would straighten
+/// the bend (`docs/algorithm-notes.md`, "Resampling"). The ends are
+/// continued straight for the curve's first and last pieces. Fewer than
+/// three points, or a curve that is not finite, fall back to the polyline.
 pub fn resample_smooth(points: &[Vec3], count: usize) -> Vec<Vec3> {
-    let n = points.len();
-    if n < 3 {
+    if points.len() < 3 {
         return resample_uniform(points, count);
     }
-    let at = |i: isize| -> Vec3 {
-        if i < 0 {
-            points[0] * 2.0 - points[1]
-        } else if i as usize >= n {
-            points[n - 1] * 2.0 - points[n - 2]
-        } else {
-            points[i as usize]
-        }
-    };
-    // Centripetal parameterisation: knots spaced by the square root of the
-    // chord, which keeps the curve from looping or overshooting at uneven
-    // spacing (Yuksel et al.). A zero chord is given a tiny knot step.
-    let knot = |a: &Vec3, b: &Vec3| libm::sqrt(math::norm(&(b - a))).max(math::LENGTH_EPSILON);
-    let lerp = |p: Vec3, q: Vec3, ta: f64, tb: f64, t: f64| {
-        p * ((tb - t) / (tb - ta)) + q * ((t - ta) / (tb - ta))
-    };
-    // The curve between points `i` and `i + 1` at `u` in [0, 1].
-    let curve = |i: usize, u: f64| -> Vec3 {
-        let i = i as isize;
-        let (p0, p1, p2, p3) = (at(i - 1), at(i), at(i + 1), at(i + 2));
-        let t1 = knot(&p0, &p1);
-        let t2 = t1 + knot(&p1, &p2);
-        let t3 = t2 + knot(&p2, &p3);
-        let t = t1 + (t2 - t1) * u;
-        // Barry-Goldman's pyramid for the curve between p1 and p2.
-        let (a1, a2, a3) = (
-            lerp(p0, p1, 0.0, t1, t),
-            lerp(p1, p2, t1, t2, t),
-            lerp(p2, p3, t2, t3, t),
-        );
-        let (b1, b2) = (lerp(a1, a2, 0.0, t2, t), lerp(a2, a3, t1, t3, t));
-        lerp(b1, b2, t1, t2, t)
-    };
-    let mut dense = Vec::with_capacity((n - 1) * SMOOTH_PIECES + 1);
-    for i in 0..n - 1 {
-        for k in 0..SMOOTH_PIECES {
-            dense.push(curve(i, k as f64 / SMOOTH_PIECES as f64));
-        }
+    let curve = RopeCurve::smooth(points);
+    spread(curve.pieces(), count, |q, t| curve.on_piece(q, t))
+        .unwrap_or_else(|| resample_uniform(points, count))
+}
+
+/// [`resample_smooth`] when `smooth` (this project's default), else the
+/// paper's [`resample_uniform`].
+pub fn resample(points: &[Vec3], count: usize, smooth: bool) -> Vec<Vec3> {
+    if smooth {
+        resample_smooth(points, count)
+    } else {
+        resample_uniform(points, count)
     }
-    dense.push(points[n - 1]);
-    if !dense.iter().all(math::is_finite) {
-        return resample_uniform(points, count);
-    }
-    // The arc lengths are measured on the pieces' chords, but each node is
-    // put on the curve itself: on a chord it would sit inside a bend by the
-    // chord's sagitta, and repeated every frame that straightens a bend
-    // nothing observes (a hidden one).
-    spread(&dense, count, |q, t| {
-        let y = curve(
-            q / SMOOTH_PIECES,
-            ((q % SMOOTH_PIECES) as f64 + t) / SMOOTH_PIECES as f64,
-        );
-        if math::is_finite(&y) {
-            y
-        } else {
-            dense[q] + (dense[q + 1] - dense[q]) * t
-        }
-    })
-    .unwrap_or_else(|| resample_uniform(points, count))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math;
 
     /// Nodes on a circle, resampled while the first node moves back and
     /// forth a quarter spacing along it (as EM moves an end node): on the
