@@ -8,6 +8,7 @@
 use alloc::vec::Vec;
 
 use crate::math::{self, Vec3};
+use crate::polyline::arc_coordinates;
 
 /// Pieces each node-to-node segment of the smooth curve is cut into to
 /// measure its arc length: at the node spacing of a rope (3-4 cm) and a
@@ -66,14 +67,7 @@ impl<'a> RopeCurve<'a> {
     }
 
     fn with_pieces(points: &'a [Vec3], pieces: usize, dense: Vec<Vec3>) -> Self {
-        let mut s = Vec::with_capacity(dense.len());
-        let mut total = 0.0;
-        for (i, p) in dense.iter().enumerate() {
-            if i > 0 {
-                total += math::norm(&(p - dense[i - 1]));
-            }
-            s.push(total);
-        }
+        let s = arc_coordinates(&dense);
         Self {
             points,
             pieces,
@@ -193,14 +187,18 @@ fn catmull_rom(points: &[Vec3], i: usize, u: f64) -> Vec3 {
     lerp(b1, b2, t1, t2, t)
 }
 
+/// Shapes the tests of the curve and of the stages that move nodes on it
+/// share.
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use alloc::vec;
+pub(crate) mod fixture {
+    use alloc::vec::Vec;
 
-    /// A U of unit sides, (0,0) -> (1,0) -> (1,1) -> (0,1) -> (0,2).
-    fn u_points(x0: f64) -> Vec<Vec3> {
-        vec![
+    use crate::math::Vec3;
+
+    /// A U of unit sides, (0,0) -> (1,0) -> (1,1) -> (0,1) -> (0,2), moved
+    /// by `x0` in x.
+    pub fn u_points(x0: f64) -> Vec<Vec3> {
+        alloc::vec![
             Vec3::new(x0, 0.0, 0.0),
             Vec3::new(x0 + 1.0, 0.0, 0.0),
             Vec3::new(x0 + 1.0, 1.0, 0.0),
@@ -208,6 +206,27 @@ mod tests {
             Vec3::new(x0, 2.0, 0.0),
         ]
     }
+
+    /// The point `s` along a circle of `radius` about the optical axis,
+    /// 0.6 m from the camera.
+    pub fn on_circle(radius: f64, s: f64) -> Vec3 {
+        let a = s / radius;
+        Vec3::new(radius * libm::cos(a), radius * libm::sin(a), 0.6)
+    }
+
+    /// The largest distance of `points` from that circle.
+    pub fn off_circle(points: &[Vec3], radius: f64) -> f64 {
+        points
+            .iter()
+            .map(|p| (libm::hypot(p.x, p.y) - radius).abs())
+            .fold(0.0, f64::max)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fixture::{on_circle, u_points};
+    use super::*;
 
     #[test]
     fn projection_looks_only_within_its_reach_of_arc_length() {
@@ -255,10 +274,7 @@ mod tests {
     fn the_smooth_curve_keeps_to_the_bend_between_its_nodes() {
         let radius = 0.05;
         let nodes: Vec<Vec3> = (0..10)
-            .map(|k| {
-                let a = 0.6 * k as f64;
-                Vec3::new(radius * libm::cos(a), radius * libm::sin(a), 0.6)
-            })
+            .map(|k| on_circle(radius, 0.6 * radius * k as f64))
             .collect();
         // Between the second and the second last node (the end segments
         // leave along their chords, off the circle).

@@ -1,6 +1,7 @@
-//! Polyline geometry every stage shares: arc length, and `count` points
-//! evenly spaced by arc length along a polyline (the paper's Eq. 12-15 on
-//! the node polyline; initialisation places its nodes with it too).
+//! Polyline geometry every stage shares: arc length, arc coordinates, and
+//! `count` points evenly spaced by arc length along a polyline (the paper's
+//! Eq. 12-15 on the node polyline; initialisation places its nodes with it
+//! too).
 
 use alloc::vec::Vec;
 
@@ -9,6 +10,20 @@ use crate::math::{self, Vec3};
 /// Arc length of the polyline (Eq. 12-13, `L`).
 pub fn polyline_length(points: &[Vec3]) -> f64 {
     points.windows(2).map(|w| math::norm(&(w[1] - w[0]))).sum()
+}
+
+/// Cumulative distance along the polyline through `points`, from the first
+/// (each point's arc coordinate).
+pub fn arc_coordinates(points: &[Vec3]) -> Vec<f64> {
+    let mut s = Vec::with_capacity(points.len());
+    let mut sum = 0.0;
+    for (i, y) in points.iter().enumerate() {
+        if i > 0 {
+            sum += math::norm(&(y - points[i - 1]));
+        }
+        s.push(sum);
+    }
+    s
 }
 
 /// `count` nodes at spacing `l = L / (count - 1)` along the polyline

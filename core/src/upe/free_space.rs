@@ -174,6 +174,20 @@ mod tests {
             .collect()
     }
 
+    /// [`tip_over_free_table`] with its tip (nodes 3-5) hidden, cleared
+    /// under the occluders `rects`: the nodes before and after, and what
+    /// the stage did.
+    fn tip_cleared_under(rects: &[Rect]) -> (Vec<Vec3>, Vec<Vec3>, FreeSpaceReport) {
+        let t = table();
+        let frame = t.frame();
+        let e = t.evidence(&frame, rects, 0.0075);
+        let before = tip_over_free_table();
+        let mut nodes = before.clone();
+        let known = [true, true, true, false, false, false];
+        let r = clear_free_space(&mut nodes, &known, &e);
+        (before, nodes, r)
+    }
+
     #[test]
     fn a_hidden_end_that_sticks_out_over_free_table_turns_back_under_the_occluder() {
         let t = table();
@@ -258,13 +272,7 @@ mod tests {
             w: 26,
             h: 9,
         }];
-        let t = table();
-        let frame = t.frame();
-        let e = t.evidence(&frame, &rects, 0.0075);
-        let mut nodes = tip_over_free_table();
-        let before = nodes.clone();
-        let known = [true, true, true, false, false, false];
-        let r = clear_free_space(&mut nodes, &known, &e);
+        let (before, nodes, r) = tip_cleared_under(&rects);
         assert_eq!((r.found, r.left, r.runs_moved), (3, 3, 0), "{r:?}");
         assert_eq!(nodes, before);
     }
@@ -297,13 +305,7 @@ mod tests {
             w: 12,
             h: 12,
         }];
-        let t = table();
-        let frame = t.frame();
-        let e = t.evidence(&frame, &rects, 0.0075);
-        let mut nodes = tip_over_free_table();
-        let before = nodes.clone();
-        let known = [true, true, true, false, false, false];
-        let r = clear_free_space(&mut nodes, &known, &e);
+        let (before, nodes, r) = tip_cleared_under(&rects);
         assert_eq!((r.found, r.left, r.runs_moved), (3, 2, 1), "{r:?}");
         let z = Vec3::new(0.0, 0.0, 1.0);
         for k in 3..6 {

@@ -262,23 +262,17 @@ pub fn resample_with_end_runs_at_rest(
     let (&first, &last) = (middle.first()?, middle.last()?);
     let mut out = Vec::with_capacity(count);
     // Each run's curve from its anchor outwards.
-    let mut head_curve = alloc::vec![first];
-    head_curve.extend(nodes[..head].iter().rev().copied());
+    let placed = |anchor: Vec3, outwards: &mut dyn Iterator<Item = &Vec3>, count: usize| {
+        let curve: Vec<Vec3> = core::iter::once(anchor).chain(outwards.copied()).collect();
+        along_within(&RopeCurve::new(&curve, smooth), count, rest_spacing, allows)
+    };
     out.extend(
-        along_within(
-            &RopeCurve::new(&head_curve, smooth),
-            head,
-            rest_spacing,
-            allows,
-        )
-        .into_iter()
-        .rev(),
+        placed(first, &mut nodes[..head].iter().rev(), head)
+            .into_iter()
+            .rev(),
     );
     out.extend_from_slice(&middle);
-    let mut tail_curve = alloc::vec![last];
-    tail_curve.extend_from_slice(&nodes[n - tail..]);
-    let tail_curve = RopeCurve::new(&tail_curve, smooth);
-    out.extend(along_within(&tail_curve, tail, rest_spacing, allows));
+    out.extend(placed(last, &mut nodes[n - tail..].iter(), tail));
     (out.len() == count && out.iter().all(math::is_finite)).then_some(out)
 }
 
@@ -420,6 +414,7 @@ pub fn conserve_middle_lengths(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::curve::fixture::{off_circle, on_circle};
 
     fn line(n: usize, step: f64) -> Vec<Vec3> {
         (0..n)
@@ -663,10 +658,7 @@ mod tests {
         // Nodes 1 cm apart along a circle of 2 cm radius; the last eight
         // hidden, the rest spacing the arc's 1 cm.
         let radius = 0.02;
-        let on_circle = |s: f64| {
-            let a = s / radius;
-            Vec3::new(radius * libm::cos(a), radius * libm::sin(a), 0.6)
-        };
+        let on_circle = |s: f64| on_circle(radius, s);
         let start: Vec<Vec3> = (0..12).map(|i| on_circle(0.01 * i as f64)).collect();
         let after = |smooth: bool| {
             let mut nodes = start.clone();
@@ -677,10 +669,7 @@ mod tests {
                 nodes = resample_with_end_runs_at_rest(&nodes, 0, 8, 12, 0.01, smooth, &|_| true)
                     .expect("runs");
             }
-            nodes
-                .iter()
-                .map(|p| (libm::hypot(p.x, p.y) - radius).abs())
-                .fold(0.0, f64::max)
+            off_circle(&nodes, radius)
         };
         // Polyline 9.6 mm off the bend; curve 0.6 mm (the Catmull-Rom curve
         // is not exactly a circle at 0.5 rad a node).

@@ -163,6 +163,7 @@ pub fn slide_estimates(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::curve::fixture::{off_circle, on_circle, u_points};
     use alloc::vec;
 
     /// An arc of radius 0.1 m, nodes 2 cm apart along it.
@@ -249,17 +250,6 @@ mod tests {
         for (k, expect) in [0.0075, 0.005, 0.0025].iter().enumerate() {
             assert!((y[k] - expect).abs() < 1e-12, "node {}: {}", k + 4, y[k]);
         }
-    }
-
-    /// A U of unit sides, (0,0) -> (1,0) -> (1,1) -> (0,1) -> (0,2), moved by `x0` in x.
-    fn u_points(x0: f64) -> Vec<Vec3> {
-        vec![
-            Vec3::new(x0, 0.0, 0.0),
-            Vec3::new(x0 + 1.0, 0.0, 0.0),
-            Vec3::new(x0 + 1.0, 1.0, 0.0),
-            Vec3::new(x0, 1.0, 0.0),
-            Vec3::new(x0, 2.0, 0.0),
-        ]
     }
 
     #[test]
@@ -350,10 +340,7 @@ mod tests {
         // A tight bend: nodes 1 cm apart on a circle of 2 cm radius, the
         // first four visible, the other eight hidden.
         let radius = 0.02;
-        let on_circle = |s: f64| {
-            let a = s / radius;
-            Vec3::new(radius * libm::cos(a), radius * libm::sin(a), 0.6)
-        };
+        let on_circle = |s: f64| on_circle(radius, s);
         let known: Vec<bool> = (0..12).map(|i| i < 4).collect();
         let mut nodes: Vec<Vec3> = (0..12).map(|i| on_circle(0.01 * i as f64)).collect();
         for frame in 0..40 {
@@ -369,10 +356,7 @@ mod tests {
             }
             nodes = now;
         }
-        let off = nodes[4..]
-            .iter()
-            .map(|p| (libm::hypot(p.x, p.y) - radius).abs())
-            .fold(0.0, f64::max);
+        let off = off_circle(&nodes[4..], radius);
         // Slid along the polyline the run unrolled: 10.7 mm off at its
         // middle; on the curve 0.6 mm at its tip (the Catmull-Rom curve is
         // not exactly a circle at 0.5 rad a node).

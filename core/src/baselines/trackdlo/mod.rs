@@ -23,9 +23,10 @@ pub use settings::TrackDloParams;
 
 use crate::math::Vec3;
 use crate::perception::camera::CameraIntrinsics;
+use crate::polyline::arc_coordinates;
 use crate::step::{Algorithm, StepInput, StepOutput, TrackingStep};
 use priors::correspondence_priors;
-use registration::{arc_coordinates, cpd_lle};
+use registration::cpd_lle;
 use visibility::{extend_visible, node_visibility};
 
 /// What a TrackDLO step decided, for display and tests.

@@ -12,6 +12,7 @@ use crate::baselines::cpd::{
     solve_linear, thin_to_pair_cap, Responsibilities,
 };
 use crate::math::{self, Vec3};
+use crate::polyline::arc_coordinates;
 
 /// Points farther than this from every node are left out of a registration,
 /// metres (the source's 0.1 m prefilter).
@@ -26,19 +27,6 @@ pub const LLE_NEIGHBOURS: usize = 6;
 const LLE_REGULARISATION: f64 = 1e-3;
 /// Floor of `sigma^2`, square metres: only guards the division.
 const MIN_VARIANCE: f64 = 1e-10;
-/// Cumulative distance along the polyline through `nodes`, from the first.
-pub fn arc_coordinates(nodes: &[Vec3]) -> Vec<f64> {
-    let mut s = Vec::with_capacity(nodes.len());
-    let mut sum = 0.0;
-    for (i, y) in nodes.iter().enumerate() {
-        if i > 0 {
-            sum += math::norm(&(y - nodes[i - 1]));
-        }
-        s.push(sum);
-    }
-    s
-}
-
 /// TrackDLO's kernel on the distance along the rope `d = |s_i - s_j|`:
 /// `G = (2d + sqrt(2) beta) exp(-sqrt(2) d / beta) / (2 beta)^2`, a
 /// Matern-type kernel that, unlike a Gaussian on Euclidean distance, keeps
