@@ -67,4 +67,4 @@ pub use perception::camera::CameraIntrinsics;
 pub use perception::frame::Frame;
 pub use perception::segmentation::{HsvRange, Rect};
 pub use step::Algorithm;
-pub use tracker::{FrameOutput, FrameStatus, Tracker};
+pub use tracker::{FrameOutput, FrameStatus, MultiTracker, Tracker};

@@ -760,6 +760,7 @@ mod tests {
             occlusions: &[],
             camera: &camera,
             radius: 0.0075,
+            others: None,
         };
         let p = fit_table(&e).expect("plane");
         assert!(p.normal.z < 0.0, "faces the camera: {:?}", p.normal);
@@ -787,6 +788,7 @@ mod tests {
             occlusions: &[],
             camera: &camera,
             radius: 0.0075,
+            others: None,
         };
         let at = |u: f64, v: f64, z: f64| camera.deproject(u, v, z);
         let p = visibility_prior(

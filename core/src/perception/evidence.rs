@@ -72,6 +72,10 @@ pub struct Evidence<'a> {
     pub camera: &'a CameraIntrinsics,
     /// The rope's radius, metres (sizes the window).
     pub radius: f64,
+    /// Pixels of the other ropes tracked in the same frame
+    /// (`MultiTracker`): another rope there hides this one as an occluder
+    /// does, however little nearer the camera it lies.
+    pub others: Option<&'a Mask>,
 }
 
 impl Evidence<'_> {
@@ -95,11 +99,16 @@ impl Evidence<'_> {
         let Some((u, v)) = self.pixel_of(p) else {
             return false;
         };
-        if self.occlusions.iter().any(|r| r.contains(u, v)) {
+        if self.occlusions.iter().any(|r| r.contains(u, v)) || self.other_rope_at(u, v) {
             return true;
         }
         let raw = self.frame.depth[(v * self.frame.width as i64 + u) as usize];
         raw != 0 && (raw as f64) * self.frame.depth_scale < p.z - OCCLUDER_MARGIN
+    }
+
+    /// `true` when another tracked rope covers pixel `(u, v)`.
+    fn other_rope_at(&self, u: i64, v: i64) -> bool {
+        self.others.is_some_and(|m| m.get(u, v))
     }
 
     /// The pixel `p` projects to, rounded; `None` when `p` is behind the
@@ -117,7 +126,7 @@ impl Evidence<'_> {
             return Sight::OutOfView;
         };
         let (w, h) = (self.frame.width as i64, self.frame.height as i64);
-        if self.occlusions.iter().any(|r| r.contains(u, v)) {
+        if self.occlusions.iter().any(|r| r.contains(u, v)) || self.other_rope_at(u, v) {
             return Sight::Covered;
         }
         let focal = 0.5 * (self.camera.fx + self.camera.fy);
@@ -222,6 +231,7 @@ pub(crate) mod fixture {
                 occlusions,
                 camera: &self.camera,
                 radius,
+                others: None,
             }
         }
 

@@ -5,7 +5,8 @@
 //! rope's axis), [`initialisation`] (the ordered centre line and `M`
 //! nodes when there is no state), and [`evidence`] (what the images say
 //! about a point: hidden by something, or in free space), and
-//! [`ego_motion`] (the camera's own motion, from the background).
+//! [`ego_motion`] (the camera's own motion, from the background), and
+//! [`sharing`] (with several ropes, which rope each pixel belongs to).
 
 pub mod camera;
 pub mod ego_motion;
@@ -14,3 +15,4 @@ pub mod frame;
 pub mod initialisation;
 pub mod point_cloud;
 pub mod segmentation;
+pub mod sharing;

@@ -30,8 +30,10 @@ use crate::upe::UpeTrackStep;
 use crate::visibility::{classify_nodes, visible_nodes_relative, NodeVisibility};
 
 mod camera;
+mod several;
 mod stepper;
 use camera::CameraFollowing;
+pub use several::{MultiTracker, MAX_ROPES};
 pub use stepper::{StepReports, Stepper};
 
 /// A tracked rope longer than this multiple of its length at
@@ -80,6 +82,20 @@ pub enum TrackerError {
     CameraMotion {
         /// What is wrong with it.
         reason: &'static str,
+    },
+    /// A [`MultiTracker`] of no ropes or more than [`MAX_ROPES`].
+    #[error("a tracker follows 1 to {max} ropes, not {count}", max = MAX_ROPES)]
+    RopeCount {
+        /// The number of ropes asked for.
+        count: usize,
+    },
+    /// A rope of a [`MultiTracker`] seen by another camera than the first.
+    #[error(
+        "rope {rope} has other camera intrinsics than rope 0: all ropes are seen by one camera"
+    )]
+    CameraMismatch {
+        /// Index of the rope.
+        rope: usize,
     },
     /// A snapshot that no tracker could have taken.
     #[error("a snapshot the tracker cannot return to: {reason}")]
@@ -167,6 +183,9 @@ pub struct Observation {
     pub occlusions: Vec<Rect>,
     /// Mask pixels in parts too wide to be the rope, left out of `cloud`.
     pub too_wide: usize,
+    /// Pixels of the other ropes tracked in the frame ([`MultiTracker`]),
+    /// which hide this one as an occluder does; `None` for one rope.
+    pub others: Option<Mask>,
 }
 
 impl Observation {
@@ -178,6 +197,7 @@ impl Observation {
             cloud: cloud.points,
             occlusions: occlusions.to_vec(),
             too_wide: cloud.too_wide,
+            others: None,
         }
     }
 }
@@ -680,6 +700,7 @@ impl Tracker {
                 occlusions: &obs.occlusions,
                 camera,
                 radius: self.radius(),
+                others: obs.others.as_ref(),
             }),
             rest_length: self.rest_length,
         }
@@ -849,6 +870,11 @@ impl Tracker {
             trackdlo: None,
             init: None,
         }
+    }
+
+    /// `true` while a rope is tracked: initialised and not lost.
+    pub fn is_tracking(&self) -> bool {
+        self.state.as_ref().is_some_and(|s| !s.lost)
     }
 
     /// Length of the current node polyline, metres.

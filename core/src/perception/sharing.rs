@@ -1,0 +1,464 @@
+//! Several ropes in one frame: which rope each segmented pixel belongs to.
+//!
+//! The ropes compete for pixels as the components of one mixture over all
+//! their nodes would, in its hard limit: a pixel that the colour ranges of
+//! several ropes accept goes to the tracked rope whose surface passes
+//! nearest the pixel's point in 3D (so depth tells the rope lying over a
+//! crossing from the one under it), if that is within reach of it. What no
+//! tracked rope is near is left to every rope whose colour it has: a rope
+//! not yet found is initialised from it, a tracked one treats it as it
+//! treats clutter. A pixel only one rope's colour accepts is that rope's.
+
+use alloc::vec;
+use alloc::vec::Vec;
+
+use super::camera::CameraIntrinsics;
+use super::frame::Frame;
+use super::segmentation::Mask;
+use crate::math::{nearest_on_segment, Vec2, Vec3};
+
+/// A tracked rope as the sharing sees it.
+#[derive(Debug, Clone, Copy)]
+pub struct RopeLine<'a> {
+    /// Its nodes, camera frame, metres.
+    pub nodes: &'a [Vec3],
+    /// Its radius, metres.
+    pub radius: f64,
+}
+
+/// One rope's part of a frame's pixels.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PixelShare {
+    /// The pixels this rope may use: of its colour, and not another
+    /// tracked rope's.
+    pub own: Mask,
+    /// The pixels of the other ropes: they hide this one where they lie.
+    pub others: Mask,
+}
+
+/// Who a pixel belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Owner {
+    /// No rope's colour.
+    Nobody,
+    /// Rope `k`'s alone.
+    Rope(usize),
+    /// Every rope whose colour it has.
+    Shared,
+}
+
+/// Shares the pixels of one frame between ropes: `masks[k]` is rope `k`'s
+/// colour mask, `lines[k]` its tracked state (`None` while not tracked)
+/// and `reach` (metres) how far from a tracked rope's surface a pixel's
+/// point may lie and still be that rope's. All masks must have the
+/// frame's size (a mask of another size is taken as empty).
+pub fn share_pixels(
+    frame: &Frame<'_>,
+    camera: &CameraIntrinsics,
+    masks: &[&Mask],
+    lines: &[Option<RopeLine<'_>>],
+    reach: f64,
+) -> Vec<PixelShare> {
+    let (w, h) = (frame.width, frame.height);
+    let n = w as usize * h as usize;
+    let usable: Vec<bool> = masks.iter().map(|m| m.data.len() == n).collect();
+    let windows: Vec<Option<Window>> = lines
+        .iter()
+        .map(|l| l.and_then(|l| Window::of(&l, camera, reach)))
+        .collect();
+    let mut owners = vec![Owner::Nobody; n];
+    let mut accepting = Vec::with_capacity(masks.len());
+    for (i, owner) in owners.iter_mut().enumerate() {
+        accepting.clear();
+        accepting.extend((0..masks.len()).filter(|&k| usable[k] && masks[k].data[i]));
+        *owner = match accepting.len() {
+            0 => Owner::Nobody,
+            1 if lines.iter().all(Option::is_none) => Owner::Rope(accepting[0]),
+            _ => {
+                let (u, v) = ((i % w as usize) as f64, (i / w as usize) as f64);
+                let raw = frame.depth[i];
+                let point =
+                    (raw != 0).then(|| camera.deproject(u, v, raw as f64 * frame.depth_scale));
+                let nearest = accepting
+                    .iter()
+                    .filter_map(|&k| {
+                        let line = lines.get(k).copied().flatten()?;
+                        let window = windows.get(k).copied().flatten()?;
+                        window.contains(u, v).then_some(())?;
+                        let d = match point {
+                            Some(p) => surface_distance(&p, &line),
+                            None => window.distance_in_image(Vec2::new(u, v), &line, camera),
+                        };
+                        Some((k, d))
+                    })
+                    .min_by(|a, b| a.1.total_cmp(&b.1));
+                match nearest {
+                    Some((k, d)) if d <= reach => Owner::Rope(k),
+                    _ if accepting.len() == 1 => Owner::Rope(accepting[0]),
+                    _ => Owner::Shared,
+                }
+            }
+        };
+    }
+    (0..masks.len())
+        .map(|k| {
+            let mut own = Mask::new(w, h);
+            let mut others = Mask::new(w, h);
+            for (i, owner) in owners.iter().enumerate() {
+                match *owner {
+                    Owner::Rope(j) if j == k => own.data[i] = true,
+                    Owner::Rope(_) => others.data[i] = true,
+                    Owner::Shared => own.data[i] = usable[k] && masks[k].data[i],
+                    Owner::Nobody => {}
+                }
+            }
+            PixelShare { own, others }
+        })
+        .collect()
+}
+
+/// Distance from `p` to the surface of `line` (its axis less its radius),
+/// metres; infinite for a line without nodes.
+fn surface_distance(p: &Vec3, line: &RopeLine<'_>) -> f64 {
+    let axis = match line.nodes {
+        [] => return f64::INFINITY,
+        [only] => (p - only).norm(),
+        nodes => nodes
+            .windows(2)
+            .map(|s| {
+                let t = nearest_on_segment(p, &s[0], &s[1]);
+                (p - (s[0] + (s[1] - s[0]) * t)).norm()
+            })
+            .fold(f64::INFINITY, f64::min),
+    };
+    axis - line.radius
+}
+
+/// The pixels within reach of a tracked rope: its projected nodes' box,
+/// widened by the reach at its nearest node.
+#[derive(Debug, Clone, Copy)]
+struct Window {
+    min: Vec2,
+    max: Vec2,
+    /// Metres per pixel at the rope's nearest node.
+    metres_per_px: f64,
+}
+
+impl Window {
+    fn of(line: &RopeLine<'_>, camera: &CameraIntrinsics, reach: f64) -> Option<Self> {
+        let nearest = line
+            .nodes
+            .iter()
+            .map(|p| p.z)
+            .filter(|z| *z > 0.0)
+            .fold(f64::INFINITY, f64::min);
+        if !nearest.is_finite() {
+            return None;
+        }
+        let focal = camera.fx.max(camera.fy);
+        let margin = (reach + line.radius) * focal / nearest + 1.0;
+        let (mut min, mut max) = (Vec2::repeat(f64::INFINITY), Vec2::repeat(f64::NEG_INFINITY));
+        for q in line.nodes.iter().filter_map(|p| camera.project(p)) {
+            min = min.inf(&q);
+            max = max.sup(&q);
+        }
+        (min.x <= max.x).then(|| Self {
+            min: min - Vec2::repeat(margin),
+            max: max + Vec2::repeat(margin),
+            metres_per_px: nearest / focal,
+        })
+    }
+
+    fn contains(&self, u: f64, v: f64) -> bool {
+        u >= self.min.x && u <= self.max.x && v >= self.min.y && v <= self.max.y
+    }
+
+    /// For a pixel without depth: its distance in the image to the rope's
+    /// projected surface, in metres at the rope's nearest node.
+    fn distance_in_image(&self, q: Vec2, line: &RopeLine<'_>, camera: &CameraIntrinsics) -> f64 {
+        let projected: Vec<Vec2> = line
+            .nodes
+            .iter()
+            .filter_map(|p| camera.project(p))
+            .collect();
+        let px = match projected.as_slice() {
+            [] => return f64::INFINITY,
+            [only] => (q - only).norm(),
+            nodes => nodes
+                .windows(2)
+                .map(|s| {
+                    let t = nearest_on_segment(&q, &s[0], &s[1]);
+                    (q - (s[0] + (s[1] - s[0]) * t)).norm()
+                })
+                .fold(f64::INFINITY, f64::min),
+        };
+        px * self.metres_per_px - line.radius
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::perception::camera::CameraIntrinsics;
+
+    const W: u32 = 160;
+    const H: u32 = 120;
+
+    fn camera() -> CameraIntrinsics {
+        CameraIntrinsics {
+            width: W,
+            height: H,
+            fx: 200.0,
+            fy: 200.0,
+            cx: 80.0,
+            cy: 60.0,
+        }
+    }
+
+    /// A frame over a table 0.6 m away, with `ropes` (each a polyline of
+    /// radius `r`) drawn into one mask and the depth of their surfaces.
+    struct Scene {
+        rgb: Vec<u8>,
+        depth: Vec<u16>,
+        mask: Mask,
+    }
+
+    impl Scene {
+        fn new(ropes: &[(&[Vec3], f64)]) -> Self {
+            let cam = camera();
+            let n = (W * H) as usize;
+            let mut depth = vec![600u16; n];
+            let mut mask = Mask::new(W, H);
+            for v in 0..H {
+                for u in 0..W {
+                    // The nearest rope surface on this pixel's ray, sampled.
+                    let ray = cam.deproject(u as f64, v as f64, 1.0);
+                    let mut best = f64::INFINITY;
+                    for (line, r) in ropes {
+                        for step in 0..2000 {
+                            let z = 0.45 + step as f64 * 0.0001;
+                            let p = ray * z;
+                            let l = RopeLine {
+                                nodes: line,
+                                radius: *r,
+                            };
+                            if surface_distance(&p, &l) <= 0.0 {
+                                best = best.min(z);
+                                break;
+                            }
+                        }
+                    }
+                    if best.is_finite() {
+                        let i = (v * W + u) as usize;
+                        depth[i] = (best * 1000.0).round() as u16;
+                        mask.data[i] = true;
+                    }
+                }
+            }
+            Self {
+                rgb: vec![0; n * 3],
+                depth,
+                mask,
+            }
+        }
+
+        fn frame(&self) -> Frame<'_> {
+            Frame::new(W, H, &self.rgb, &self.depth, 0.001).expect("frame")
+        }
+    }
+
+    fn segment(a: Vec3, b: Vec3, count: usize) -> Vec<Vec3> {
+        (0..count)
+            .map(|i| a + (b - a) * (i as f64 / (count - 1) as f64))
+            .collect()
+    }
+
+    /// Pixels of `share.own` whose point lies nearer `line`'s axis than
+    /// `other`'s: the share is right when every own pixel does.
+    fn misassigned(scene: &Scene, share: &Mask, line: &[Vec3], other: &[Vec3]) -> usize {
+        let cam = camera();
+        let axis = |p: &Vec3, l: &[Vec3]| {
+            surface_distance(
+                p,
+                &RopeLine {
+                    nodes: l,
+                    radius: 0.0,
+                },
+            )
+        };
+        (0..share.data.len())
+            .filter(|&i| share.data[i])
+            .filter(|&i| {
+                let (u, v) = ((i % W as usize) as f64, (i / W as usize) as f64);
+                let p = cam.deproject(u, v, scene.depth[i] as f64 * 0.001);
+                axis(&p, other) < axis(&p, line)
+            })
+            .count()
+    }
+
+    #[test]
+    fn two_parallel_ropes_a_centimetre_apart_each_keep_their_own_pixels() {
+        let r = 0.003;
+        let a = segment(
+            Vec3::new(-0.1, -0.005, 0.597),
+            Vec3::new(0.1, -0.005, 0.597),
+            12,
+        );
+        let b = segment(
+            Vec3::new(-0.1, 0.005, 0.597),
+            Vec3::new(0.1, 0.005, 0.597),
+            12,
+        );
+        let scene = Scene::new(&[(&a, r), (&b, r)]);
+        let frame = scene.frame();
+        let lines = [
+            Some(RopeLine {
+                nodes: &a,
+                radius: r,
+            }),
+            Some(RopeLine {
+                nodes: &b,
+                radius: r,
+            }),
+        ];
+        let shares = share_pixels(&frame, &camera(), &[&scene.mask, &scene.mask], &lines, 0.04);
+        let total = scene.mask.count();
+        let (na, nb) = (shares[0].own.count(), shares[1].own.count());
+        assert_eq!(na + nb, total, "every pixel goes to one rope");
+        assert!(na.abs_diff(nb) * 10 < total, "{na} against {nb}");
+        assert_eq!(misassigned(&scene, &shares[0].own, &a, &b), 0);
+        assert_eq!(misassigned(&scene, &shares[1].own, &b, &a), 0);
+        assert_eq!(shares[0].others, shares[1].own);
+    }
+
+    #[test]
+    fn at_a_crossing_the_pixels_go_to_the_rope_on_top() {
+        let r = 0.004;
+        // `top` crosses over `under`, a diameter nearer the camera.
+        let under = segment(Vec3::new(-0.1, 0.0, 0.596), Vec3::new(0.1, 0.0, 0.596), 12);
+        let top = segment(Vec3::new(0.0, -0.1, 0.588), Vec3::new(0.0, 0.1, 0.588), 12);
+        let scene = Scene::new(&[(&under, r), (&top, r)]);
+        let frame = scene.frame();
+        let lines = [
+            Some(RopeLine {
+                nodes: &under,
+                radius: r,
+            }),
+            Some(RopeLine {
+                nodes: &top,
+                radius: r,
+            }),
+        ];
+        let shares = share_pixels(&frame, &camera(), &[&scene.mask, &scene.mask], &lines, 0.04);
+        let cam = camera();
+        let centre = cam.project(&Vec3::new(0.0, 0.0, 0.588)).expect("in view");
+        let (u, v) = (centre.x.round() as i64, centre.y.round() as i64);
+        assert!(shares[1].own.get(u, v), "the crossing is the top rope's");
+        assert!(!shares[0].own.get(u, v) && shares[0].others.get(u, v));
+        assert_eq!(misassigned(&scene, &shares[1].own, &top, &under), 0);
+        // The rope underneath keeps its pixels on both sides of the crossing.
+        let left = cam.project(&under[2]).expect("in view");
+        let right = cam.project(&under[9]).expect("in view");
+        assert!(shares[0]
+            .own
+            .get(left.x.round() as i64, left.y.round() as i64));
+        assert!(shares[0]
+            .own
+            .get(right.x.round() as i64, right.y.round() as i64));
+    }
+
+    #[test]
+    fn pixels_far_from_every_tracked_rope_are_left_to_all_of_its_colour() {
+        let r = 0.003;
+        let a = segment(
+            Vec3::new(-0.1, -0.05, 0.597),
+            Vec3::new(0.1, -0.05, 0.597),
+            12,
+        );
+        let b = segment(
+            Vec3::new(-0.1, 0.05, 0.597),
+            Vec3::new(0.1, 0.05, 0.597),
+            12,
+        );
+        let scene = Scene::new(&[(&a, r), (&b, r)]);
+        let frame = scene.frame();
+        // Only `a` is tracked: `b`'s pixels are free for the second rope,
+        // and for `a` too (as clutter), but `a`'s are `a`'s alone.
+        let lines = [
+            Some(RopeLine {
+                nodes: &a,
+                radius: r,
+            }),
+            None,
+        ];
+        let shares = share_pixels(&frame, &camera(), &[&scene.mask, &scene.mask], &lines, 0.04);
+        let at = |p: &Vec3| {
+            let q = camera().project(p).expect("in view");
+            (q.x.round() as i64, q.y.round() as i64)
+        };
+        let (au, av) = at(&a[6]);
+        let (bu, bv) = at(&b[6]);
+        assert!(shares[0].own.get(au, av) && !shares[1].own.get(au, av));
+        assert!(shares[1].others.get(au, av));
+        assert!(shares[1].own.get(bu, bv) && shares[0].own.get(bu, bv));
+        assert!(!shares[0].others.get(bu, bv));
+    }
+
+    #[test]
+    fn a_pixel_of_one_colour_is_that_ropes_whatever_lies_near() {
+        let r = 0.003;
+        let a = segment(
+            Vec3::new(-0.1, -0.005, 0.597),
+            Vec3::new(0.1, -0.005, 0.597),
+            12,
+        );
+        let b = segment(
+            Vec3::new(-0.1, 0.005, 0.597),
+            Vec3::new(0.1, 0.005, 0.597),
+            12,
+        );
+        let both = Scene::new(&[(&a, r), (&b, r)]);
+        let frame = both.frame();
+        // Two colours: rope `a` is the left half of the pixels' colour,
+        // rope `b` the right half, whichever rope lies there.
+        let mut left = both.mask.clone();
+        let mut right = both.mask.clone();
+        for (i, (l, r)) in left.data.iter_mut().zip(&mut right.data).enumerate() {
+            if (i % W as usize) < (W / 2) as usize {
+                *r = false;
+            } else {
+                *l = false;
+            }
+        }
+        let lines = [
+            Some(RopeLine {
+                nodes: &a,
+                radius: r,
+            }),
+            Some(RopeLine {
+                nodes: &b,
+                radius: r,
+            }),
+        ];
+        let shares = share_pixels(&frame, &camera(), &[&left, &right], &lines, 0.04);
+        assert_eq!(shares[0].own, left);
+        assert_eq!(shares[1].own, right);
+        assert_eq!(shares[0].others, right);
+    }
+
+    #[test]
+    fn a_mask_of_another_size_or_no_ropes_does_not_panic() {
+        let rgb = vec![0u8; (W * H * 3) as usize];
+        let depth = vec![0u16; (W * H) as usize];
+        let frame = Frame::new(W, H, &rgb, &depth, 0.001).expect("frame");
+        let small = Mask::new(4, 4);
+        let nan = [Vec3::new(f64::NAN, 0.0, 0.5), Vec3::new(0.0, 0.0, 0.5)];
+        let lines = [Some(RopeLine {
+            nodes: &nan,
+            radius: 0.003,
+        })];
+        let shares = share_pixels(&frame, &camera(), &[&small], &lines, 0.04);
+        assert_eq!(shares[0].own.count(), 0);
+        assert!(share_pixels(&frame, &camera(), &[], &[], 0.04).is_empty());
+    }
+}

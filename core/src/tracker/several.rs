@@ -1,0 +1,150 @@
+//! Several ropes in one frame: one [`Tracker`] per rope, each stepping on
+//! the pixels [`share_pixels`] gives it, the others' pixels hiding it as an
+//! occluder does.
+
+use alloc::vec::Vec;
+
+use super::{FrameOutput, Observation, Tracker, TrackerError, UNEXPLAINED_REACH};
+use crate::perception::frame::Frame;
+use crate::perception::segmentation::{Mask, Rect};
+use crate::perception::sharing::{share_pixels, RopeLine};
+
+/// Most ropes one [`MultiTracker`] follows: the sharing of pixels costs
+/// each pixel a look at every rope's nodes.
+pub const MAX_ROPES: usize = 8;
+
+/// Tracks up to [`MAX_ROPES`] ropes seen by one camera.
+///
+/// Each frame is segmented once per colour range; the pixels several
+/// ropes' colours accept are shared out by [`share_pixels`] (nearest
+/// tracked rope in 3D), so a rope lying across another does not take its
+/// points, and each rope's step then runs on its own share with the other
+/// ropes' pixels as occluders (`Evidence::others`). Ropes tracked at the
+/// start of the frame step first, on the shares of the last states; then
+/// each rope not tracked (not yet found, or lost) is initialised in turn
+/// from what the tracked ropes leave, so two ropes of one colour never
+/// take the same shape. With one rope it is exactly [`Tracker::process`].
+#[derive(Debug, Clone)]
+pub struct MultiTracker {
+    ropes: Vec<Tracker>,
+}
+
+impl MultiTracker {
+    /// A tracker of `ropes`, one [`Tracker`] each (their own parameters,
+    /// colour ranges and priors), all with the same camera.
+    pub fn new(ropes: Vec<Tracker>) -> Result<Self, TrackerError> {
+        if ropes.is_empty() || ropes.len() > MAX_ROPES {
+            return Err(TrackerError::RopeCount { count: ropes.len() });
+        }
+        let camera = *ropes[0].camera();
+        if let Some(rope) = ropes.iter().position(|t| *t.camera() != camera) {
+            return Err(TrackerError::CameraMismatch { rope });
+        }
+        Ok(Self { ropes })
+    }
+
+    /// The ropes' trackers, in the order given.
+    pub fn ropes(&self) -> &[Tracker] {
+        &self.ropes
+    }
+
+    /// Rope `k`'s tracker (to set a hint or a prior), if there is one.
+    pub fn rope_mut(&mut self, k: usize) -> Option<&mut Tracker> {
+        self.ropes.get_mut(k)
+    }
+
+    /// Forgets every rope's state.
+    pub fn reset(&mut self) {
+        self.ropes.iter_mut().for_each(Tracker::reset);
+    }
+
+    /// Tracks every rope on `frame` (with `occlusions` blacked out): one
+    /// output per rope, in order. Fails only on a frame that does not fit
+    /// the camera.
+    pub fn process(
+        &mut self,
+        frame: &Frame<'_>,
+        occlusions: &[Rect],
+    ) -> Result<Vec<FrameOutput>, TrackerError> {
+        if let [only] = self.ropes.as_mut_slice() {
+            return Ok(alloc::vec![only.process(frame, occlusions)?]);
+        }
+        let masks = self.segment(frame, occlusions)?;
+        let mut outputs: Vec<Option<FrameOutput>> = self.ropes.iter().map(|_| None).collect();
+        // Tracked ropes step on the shares of their last states...
+        let tracked: Vec<usize> = (0..self.ropes.len())
+            .filter(|&k| self.ropes[k].is_tracking())
+            .collect();
+        if !tracked.is_empty() {
+            let shares = self.share(frame, &masks);
+            for (&k, share) in tracked.iter().zip(tracked.iter().map(|&k| &shares[k])) {
+                let obs = self.observation(k, frame, share, occlusions);
+                outputs[k] = Some(self.ropes[k].update(frame, &obs));
+            }
+        }
+        // ...then each rope not tracked is looked for, in order, in what
+        // the ropes tracked by then leave.
+        for k in 0..self.ropes.len() {
+            if outputs[k].is_some() {
+                continue;
+            }
+            let shares = self.share(frame, &masks);
+            let obs = self.observation(k, frame, &shares[k], occlusions);
+            outputs[k] = Some(self.ropes[k].update(frame, &obs));
+        }
+        Ok(outputs.into_iter().flatten().collect())
+    }
+
+    /// Each rope's colour mask; ropes of one colour range share one.
+    fn segment(&self, frame: &Frame<'_>, occlusions: &[Rect]) -> Result<Vec<Mask>, TrackerError> {
+        let mut masks: Vec<Mask> = Vec::with_capacity(self.ropes.len());
+        for (k, rope) in self.ropes.iter().enumerate() {
+            let same = self.ropes[..k].iter().position(|r| r.hsv() == rope.hsv());
+            masks.push(match same {
+                Some(j) => masks[j].clone(),
+                None => rope.segment(frame, occlusions)?,
+            });
+        }
+        Ok(masks)
+    }
+
+    /// The pixels shared out between the ropes as they stand now.
+    fn share(
+        &self,
+        frame: &Frame<'_>,
+        masks: &[Mask],
+    ) -> Vec<crate::perception::sharing::PixelShare> {
+        let lines: Vec<Option<RopeLine<'_>>> = self
+            .ropes
+            .iter()
+            .map(|t| {
+                t.is_tracking().then(|| RopeLine {
+                    nodes: t.nodes(),
+                    radius: t.radius(),
+                })
+            })
+            .collect();
+        let refs: Vec<&Mask> = masks.iter().collect();
+        let reach = self
+            .ropes
+            .iter()
+            .map(|t| UNEXPLAINED_REACH * t.params().visibility_radius)
+            .fold(0.0, f64::max);
+        share_pixels(frame, self.ropes[0].camera(), &refs, &lines, reach)
+    }
+
+    /// Rope `k`'s observation of its share.
+    fn observation(
+        &self,
+        k: usize,
+        frame: &Frame<'_>,
+        share: &crate::perception::sharing::PixelShare,
+        occlusions: &[Rect],
+    ) -> Observation {
+        let rope = &self.ropes[k];
+        let cloud = rope.cloud(frame, &share.own);
+        let mut obs = Observation::new(share.own.clone(), cloud, occlusions);
+        obs.others = Some(share.others.clone());
+        obs
+    }
+}
