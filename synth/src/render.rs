@@ -208,8 +208,16 @@ fn turned(rows: [Vec3; 3], angles: [f64; 3]) -> [Vec3; 3] {
 #[derive(Clone, Copy)]
 enum Surface {
     Table,
-    Rope { s: f64, n: Vec3, axis: Vec3 },
-    Box { n: Vec3, albedo: [f64; 3] },
+    Rope {
+        s: f64,
+        n: Vec3,
+        axis: Vec3,
+        look: usize,
+    },
+    Box {
+        n: Vec3,
+        albedo: [f64; 3],
+    },
 }
 
 /// Ray (origin 0, unit direction `rd`) against the capsule `a`-`b` of radius `r`.
@@ -319,7 +327,21 @@ fn value_noise(x: f64, y: f64, cell: f64, seed: u64) -> f64 {
     a + (b - a) * sy
 }
 
-/// Renders the rope (particles in the world frame, radius `r`) and boxes.
+/// One rope as the renderer draws it.
+#[derive(Debug, Clone, Copy)]
+pub struct RopeLook<'a> {
+    /// Particles, world frame, metres.
+    pub particles: &'a [Vec3],
+    /// Radius, metres.
+    pub radius: f64,
+    /// Albedo, RGB in [0, 1].
+    pub color: [f64; 3],
+    /// A second albedo for every other strand (a two-tone rope).
+    pub second_color: Option<[f64; 3]>,
+}
+
+/// Renders the rope (particles in the world frame, radius `r`, in the
+/// settings' colours) and boxes.
 pub fn render(
     settings: &RenderSettings,
     particles: &[Vec3],
@@ -327,14 +349,25 @@ pub fn render(
     boxes: &[OccluderBox],
     rng: &mut SplitMix64,
 ) -> Rendered {
+    let look = RopeLook {
+        particles,
+        radius,
+        color: settings.rope_color,
+        second_color: settings.rope_second_color,
+    };
+    render_ropes(settings, &[look], boxes, rng)
+}
+
+/// Renders several ropes and boxes (the settings' rope colours unused).
+pub fn render_ropes(
+    settings: &RenderSettings,
+    ropes: &[RopeLook<'_>],
+    boxes: &[OccluderBox],
+    rng: &mut SplitMix64,
+) -> Rendered {
     let cam = &settings.camera;
     let (w, h) = (cam.width as usize, cam.height as usize);
     let pose = settings.pose();
-    let pts: Vec<Vec3> = particles.iter().map(|p| pose.world_to_camera(p)).collect();
-    let mut arc = vec![0.0; pts.len()];
-    for i in 1..pts.len() {
-        arc[i] = arc[i - 1] + math::norm(&(pts[i] - pts[i - 1]));
-    }
     let ray = |u: usize, v: usize| {
         let d = Vec3::new(
             (u as f64 - cam.cx) / cam.fx,
@@ -380,32 +413,45 @@ pub fn render(
             clampv(v1 + margin) + 1,
         ))
     };
-    for i in 0..pts.len().saturating_sub(1) {
-        let (a, b) = (pts[i], pts[i + 1]);
-        let zmin = a.z.min(b.z) - radius;
-        if zmin <= 1e-3 {
-            continue;
+    for (look, rope) in ropes.iter().enumerate() {
+        let radius = rope.radius;
+        let pts: Vec<Vec3> = rope
+            .particles
+            .iter()
+            .map(|p| pose.world_to_camera(p))
+            .collect();
+        let mut arc = vec![0.0; pts.len()];
+        for i in 1..pts.len() {
+            arc[i] = arc[i - 1] + math::norm(&(pts[i] - pts[i - 1]));
         }
-        let margin = radius * cam.fx.max(cam.fy) / zmin + 2.0;
-        let Some((u0, u1, v0, v1)) = bbox(&[a, b], margin) else {
-            continue;
-        };
-        let axis = (b - a) / math::norm(&(b - a)).max(1e-12);
-        for v in v0..v1.min(h) {
-            for u in u0..u1.min(w) {
-                let rd = ray(u, v);
-                if let Some((t, param)) = ray_capsule(&rd, &a, &b, radius) {
-                    let k = v * w + u;
-                    if t < dist[k] {
-                        let p = rd * t;
-                        let c = a + (b - a) * param;
-                        let n = (p - c) / math::norm(&(p - c)).max(1e-12);
-                        dist[k] = t;
-                        surf[k] = Surface::Rope {
-                            s: arc[i] + param * (arc[i + 1] - arc[i]),
-                            n,
-                            axis,
-                        };
+        for i in 0..pts.len().saturating_sub(1) {
+            let (a, b) = (pts[i], pts[i + 1]);
+            let zmin = a.z.min(b.z) - radius;
+            if zmin <= 1e-3 {
+                continue;
+            }
+            let margin = radius * cam.fx.max(cam.fy) / zmin + 2.0;
+            let Some((u0, u1, v0, v1)) = bbox(&[a, b], margin) else {
+                continue;
+            };
+            let axis = (b - a) / math::norm(&(b - a)).max(1e-12);
+            for v in v0..v1.min(h) {
+                for u in u0..u1.min(w) {
+                    let rd = ray(u, v);
+                    if let Some((t, param)) = ray_capsule(&rd, &a, &b, radius) {
+                        let k = v * w + u;
+                        if t < dist[k] {
+                            let p = rd * t;
+                            let c = a + (b - a) * param;
+                            let n = (p - c) / math::norm(&(p - c)).max(1e-12);
+                            dist[k] = t;
+                            surf[k] = Surface::Rope {
+                                s: arc[i] + param * (arc[i + 1] - arc[i]),
+                                n,
+                                axis,
+                                look,
+                            };
+                        }
                     }
                 }
             }
@@ -486,7 +532,8 @@ pub fn render(
                         t,
                     )
                 }
-                Surface::Rope { s, n, axis } => {
+                Surface::Rope { s, n, axis, look } => {
+                    let rope = &ropes[look];
                     // Helical strands: phase along the rope plus angle around it.
                     let e1 = axis.cross(&Vec3::new(0.0, 0.0, 1.0));
                     let e1 = if e1.norm() > 1e-9 {
@@ -498,9 +545,9 @@ pub fn render(
                     let theta = libm::atan2(n.dot(&e2), n.dot(&e1));
                     let phase = core::f64::consts::TAU * s / settings.braid_pitch + 2.0 * theta;
                     let wave = libm::cos(phase);
-                    let albedo = match settings.rope_second_color {
+                    let albedo = match rope.second_color {
                         Some(second) if wave < 0.0 => second,
-                        _ => settings.rope_color,
+                        _ => rope.color,
                     };
                     (albedo, n.dot(&light).max(0.0), 0.78 + 0.22 * wave)
                 }
