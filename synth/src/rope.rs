@@ -45,6 +45,15 @@ impl Default for RopeSettings {
     }
 }
 
+/// Another rope as an obstacle for one step ([`Rope::step_among`]).
+#[derive(Debug, Clone, Copy)]
+pub struct Obstacle<'a> {
+    /// Its particles, world frame, metres.
+    pub particles: &'a [Vec3],
+    /// Its radius, metres.
+    pub radius: f64,
+}
+
 /// Gravity, m/s^2.
 const GRAVITY: f64 = 9.81;
 
@@ -143,6 +152,15 @@ impl Rope {
     /// Advances the simulation by `dt` seconds. Grasped particles move
     /// linearly from their position to their target over the step.
     pub fn step(&mut self, dt: f64) {
+        self.step_among(dt, &[]);
+    }
+
+    /// [`Rope::step`] beside other ropes, held where they are for this
+    /// step: each is a chain of particles of a radius (another rope's `x`
+    /// and [`Rope::radius`]) that this rope's particles are kept out of, so
+    /// that ropes lie on each other instead of through. Stepping the ropes
+    /// of a scene one after the other makes them push each other.
+    pub fn step_among(&mut self, dt: f64, others: &[Obstacle<'_>]) {
         let n = self.x.len();
         let sub = self.settings.substeps.max(1);
         let h = dt / sub as f64;
@@ -205,6 +223,9 @@ impl Rope {
             if self.settings.self_contact {
                 self.self_contact(&mut p, &w);
             }
+            for other in others {
+                Self::keep_out(&mut p, &w, r, other);
+            }
             // Table contact with Coulomb-like friction on the step's displacement.
             for i in 0..n {
                 if w[i] == 0.0 || p[i].z >= r {
@@ -228,6 +249,21 @@ impl Rope {
             for i in 0..n {
                 self.v[i] = (p[i] - self.x[i]) / h;
                 self.x[i] = p[i];
+            }
+        }
+    }
+
+    /// Moves particles that are inside `other`'s particles (closer than the
+    /// two radii) out along the line between them.
+    fn keep_out(p: &mut [Vec3], w: &[f64], r: f64, other: &Obstacle<'_>) {
+        let min = r + other.radius;
+        for (pi, _) in p.iter_mut().zip(w).filter(|(_, w)| **w > 0.0) {
+            for q in other.particles {
+                let d = *pi - q;
+                let len = math::norm(&d);
+                if len < min && len > 1e-12 {
+                    *pi = q + d * (min / len);
+                }
             }
         }
     }

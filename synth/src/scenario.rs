@@ -223,6 +223,30 @@ pub(crate) struct Pull {
     pub(crate) circular: bool,
 }
 
+impl Pull {
+    /// Where the grasp holds its particle at frame `f` (from `origin`, the
+    /// particle's settled position), or `None` before it starts.
+    pub(crate) fn target(&self, origin: Vec3, f: usize) -> Option<Vec3> {
+        if f < self.start {
+            return None;
+        }
+        let x = smoothstep((f - self.start) as f64 / (self.end - self.start).max(1) as f64);
+        Some(if self.circular {
+            // Lift first, then swing around a circle in the table plane.
+            let lift = smoothstep(x * 4.0);
+            let a = core::f64::consts::TAU * x;
+            origin
+                + Vec3::new(
+                    self.offset.x * (libm::cos(a) - 1.0) * lift,
+                    self.offset.x * libm::sin(a) * lift,
+                    self.offset.z * lift,
+                )
+        } else {
+            origin + self.offset * x
+        })
+    }
+}
+
 /// How an occluder box moves while it is in the scene.
 #[derive(Debug, Clone, Copy)]
 pub(crate) enum BoxPath {
@@ -252,6 +276,54 @@ pub(crate) struct MovingBox {
     /// a gripper).
     pub(crate) shape: OccluderBox,
     pub(crate) path: BoxPath,
+}
+
+impl MovingBox {
+    /// The box at frame `f` (within its range), given the scene's grasps
+    /// (`pulls`, with their origins) and where they hold their particles
+    /// at `f` (`targets`), which a gripper rides on.
+    pub(crate) fn at(&self, f: usize, pulls: &[(Pull, Vec3)], targets: &[Vec3]) -> OccluderBox {
+        let shifted = |by: Vec3| OccluderBox {
+            min: self.shape.min + by,
+            max: self.shape.max + by,
+            color: self.shape.color,
+        };
+        match self.path {
+            BoxPath::Linear { travel, bob, dwell } => {
+                let x = (f - self.first) as f64 / (self.last - self.first).max(1) as f64;
+                let along = if dwell {
+                    0.5 + 0.5 * libm::pow(2.0 * x - 1.0, 3.0)
+                } else {
+                    x
+                };
+                let lift = Vec3::new(0.0, 0.0, bob * libm::sin(core::f64::consts::PI * x));
+                // Added in this order, as the scenes were always made.
+                OccluderBox {
+                    min: self.shape.min + travel * along + lift,
+                    max: self.shape.max + travel * along + lift,
+                    color: self.shape.color,
+                }
+            }
+            BoxPath::Enter { from, frames } => {
+                let x = (f - self.first) as f64 / frames.max(1) as f64;
+                shifted(from * (1.0 - smoothstep(x)))
+            }
+            BoxPath::Gripper {
+                pull,
+                descent,
+                approach,
+            } => {
+                let start = pulls.get(pull).map_or(0, |(p, _)| p.start);
+                let target = targets.get(pull).copied().unwrap_or_default();
+                let coming = if f < start {
+                    1.0 - smoothstep((f + approach - start) as f64 / approach.max(1) as f64)
+                } else {
+                    0.0
+                };
+                shifted(target + Vec3::new(0.0, 0.0, descent * coming))
+            }
+        }
+    }
 }
 
 /// Scales applied to a scenario's events, for scenes made to order (the
@@ -731,25 +803,10 @@ impl Scenario {
         let mut targets: Vec<Vec3> = self.pulls.iter().map(|(_, origin)| *origin).collect();
         if f > 0 {
             for (k, (p, origin)) in self.pulls.iter().enumerate() {
-                if f < p.start {
-                    continue;
+                if let Some(target) = p.target(*origin, f) {
+                    targets[k] = target;
+                    self.rope.grasp(p.particle, target);
                 }
-                let x = smoothstep((f - p.start) as f64 / (p.end - p.start).max(1) as f64);
-                let target = if p.circular {
-                    // Lift first, then swing around a circle in the table plane.
-                    let lift = smoothstep(x * 4.0);
-                    let a = core::f64::consts::TAU * x;
-                    origin
-                        + Vec3::new(
-                            p.offset.x * (libm::cos(a) - 1.0) * lift,
-                            p.offset.x * libm::sin(a) * lift,
-                            p.offset.z * lift,
-                        )
-                } else {
-                    origin + p.offset * x
-                };
-                targets[k] = target;
-                self.rope.grasp(p.particle, target);
             }
             self.rope.step(1.0 / 30.0);
         }
@@ -757,50 +814,7 @@ impl Scenario {
             .boxes
             .iter()
             .filter(|b| (b.first..=b.last).contains(&f))
-            .map(|b| match b.path {
-                BoxPath::Linear { travel, bob, dwell } => {
-                    let x = (f - b.first) as f64 / (b.last - b.first).max(1) as f64;
-                    let along = if dwell {
-                        0.5 + 0.5 * libm::pow(2.0 * x - 1.0, 3.0)
-                    } else {
-                        x
-                    };
-                    let lift = Vec3::new(0.0, 0.0, bob * libm::sin(core::f64::consts::PI * x));
-                    OccluderBox {
-                        min: b.shape.min + travel * along + lift,
-                        max: b.shape.max + travel * along + lift,
-                        color: b.shape.color,
-                    }
-                }
-                BoxPath::Enter { from, frames } => {
-                    let x = (f - b.first) as f64 / frames.max(1) as f64;
-                    let off = from * (1.0 - smoothstep(x));
-                    OccluderBox {
-                        min: b.shape.min + off,
-                        max: b.shape.max + off,
-                        color: b.shape.color,
-                    }
-                }
-                BoxPath::Gripper {
-                    pull,
-                    descent,
-                    approach,
-                } => {
-                    let start = self.pulls.get(pull).map_or(0, |(p, _)| p.start);
-                    let target = targets.get(pull).copied().unwrap_or_default();
-                    let coming = if f < start {
-                        1.0 - smoothstep((f + approach - start) as f64 / approach.max(1) as f64)
-                    } else {
-                        0.0
-                    };
-                    let at = target + Vec3::new(0.0, 0.0, descent * coming);
-                    OccluderBox {
-                        min: b.shape.min + at,
-                        max: b.shape.max + at,
-                        color: b.shape.color,
-                    }
-                }
-            })
+            .map(|b| b.at(f, &self.pulls, &targets))
             .collect();
         let r = render(
             &self.render,
