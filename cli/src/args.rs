@@ -8,7 +8,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use upetrack::Algorithm;
 use upetrack_recordings::align::AlignArithmetic;
 use upetrack_synth::random::SeedRange;
-use upetrack_synth::{ScenarioKind, Variant};
+use upetrack_synth::{ScenarioKind, SeveralKind, Variant};
 
 /// What the exit codes mean (the README repeats it).
 const EXIT_CODES: &str = "\
@@ -348,6 +348,10 @@ pub struct SynthArgs {
     /// Also write the colour frames as a .y4m video (a fake camera's input).
     #[arg(long, value_name = "video.y4m")]
     pub y4m: Option<PathBuf>,
+    /// With a scene of several ropes: leave rope K (from 0) out, simulated
+    /// and drawn without it (the single-rope figure to compare with).
+    #[arg(long, value_name = "K")]
+    pub without: Option<usize>,
 }
 
 /// `synth`'s examples.
@@ -374,11 +378,16 @@ pub enum SynthScenario {
     Described(ScenarioKind),
     /// Scenes drawn from the seed.
     Random,
+    /// A scene of several ropes.
+    Several(SeveralKind),
 }
 
 fn parse_scenario(name: &str) -> Result<SynthScenario, String> {
     if name == "random" {
         return Ok(SynthScenario::Random);
+    }
+    if let Some(kind) = SeveralKind::parse(name) {
+        return Ok(SynthScenario::Several(kind));
     }
     ScenarioKind::parse(name)
         .map(SynthScenario::Described)
@@ -411,7 +420,8 @@ pub fn scenario_name(kind: &ScenarioKind) -> String {
 
 /// "one of a, b, ..": the scenarios the simulator knows.
 fn scenario_names() -> String {
-    let names: Vec<String> = ScenarioKind::EXAMPLES.iter().map(scenario_name).collect();
+    let mut names: Vec<String> = ScenarioKind::EXAMPLES.iter().map(scenario_name).collect();
+    names.extend(SeveralKind::ALL.iter().map(|k| k.name().to_string()));
     format!("one of random, {}", names.join(", "))
 }
 
@@ -425,6 +435,10 @@ pub fn scenario_list() -> String {
         "random",
         "a whole scene drawn from the seed (docs/synthetic.md)",
     );
+    s += "\nScenes of several ropes (dlo.json lists them; --without K leaves rope K out):\n";
+    for k in SeveralKind::ALL {
+        s += &list_entry(k.name(), k.description());
+    }
     s += "\nVariants (--variant):\n";
     for v in Variant::ALL {
         s += &list_entry(v.name, v.description);

@@ -18,7 +18,7 @@ use std::process::ExitCode;
 
 use clap::{CommandFactory, Parser};
 use upetrack::{Algorithm, Params};
-use upetrack_io::eval::{summarise, Summary};
+use upetrack_io::eval::{summarise_ropes, Summary};
 use upetrack_io::{Sequence, SequenceError};
 
 pub use args::RecordingArgs;
@@ -274,7 +274,8 @@ fn cmd_eval(args: &EvalArgs) -> Result<(), CliError> {
                 algorithm.name()
             );
             let bar = progress::bar(seq.len() as u64, "frames", label);
-            let (summary, result) = evaluate(&seq, &name, with_algorithm(params, algorithm), &bar)?;
+            let (summaries, result) =
+                evaluate_ropes(&seq, &name, with_algorithm(params, algorithm), &bar)?;
             bar.finish_and_clear();
             if let Some(csv) = &args.per_frame {
                 let path = if several {
@@ -284,10 +285,10 @@ fn cmd_eval(args: &EvalArgs) -> Result<(), CliError> {
                 };
                 write_per_frame(Path::new(&path), &name, &result, &seq)?;
             }
-            if summary.evaluated_frames == 0 {
+            if summaries.iter().all(|s| s.evaluated_frames == 0) {
                 eprintln!("{path}: no ground truth; errors are not available");
             }
-            rows.push(summary);
+            rows.extend(summaries);
         }
     }
     print_table(&rows, &args.outputs)
@@ -311,13 +312,15 @@ fn cmd_score(args: &ScoreArgs) -> Result<(), CliError> {
                 result.frames.len()
             )));
         }
-        rows.push(summarise(
-            &name,
-            &result,
-            &seq.groundtruth,
-            &seq.camera,
-            seq.first_occluded_frame(),
-        ));
+        if result.rope_count() != seq.ropes.len() {
+            return Err(CliError::input(format!(
+                "{}: {} rope(s), but the sequence's dlo.json lists {}",
+                r.display(),
+                result.rope_count(),
+                seq.ropes.len()
+            )));
+        }
+        rows.extend(summarise_ropes(&name, &result, &seq));
     }
     print_table(&rows, &args.outputs)
 }
@@ -329,10 +332,17 @@ fn sequence_name(path: &str) -> String {
         .map_or(path.to_string(), |n| n.to_string_lossy().into_owned())
 }
 
-/// Prints the table of `rows`, and writes it where `--json` and `--markdown` say.
+/// Prints the table of `rows` (and the identity swaps of several ropes'
+/// rows), and writes it where `--json` and `--markdown` say.
 fn print_table(rows: &[Summary], outputs: &TableOutputs) -> Result<(), CliError> {
     let table = markdown_table(rows);
     println!("{table}");
+    for r in rows.iter().filter(|r| r.sequence.ends_with("/all")) {
+        println!(
+            "{} {}: {} identity swap(s), {} frame(s) with a rope nearer another rope's ground truth than its own",
+            r.sequence, r.algorithm, r.identity_swaps, r.swapped_frames
+        );
+    }
     if let Some(p) = &outputs.json {
         upetrack_io::write::write_json(p, &rows)?;
     }
@@ -343,22 +353,35 @@ fn print_table(rows: &[Summary], outputs: &TableOutputs) -> Result<(), CliError>
 }
 
 /// Tracks `seq` with `params` (counting frames on `bar`) and summarises
-/// the errors against its ground truth.
+/// the errors against its ground truth (of all its ropes together).
 fn evaluate(
     seq: &AnySequence,
     name: &str,
     params: Params,
     bar: &indicatif::ProgressBar,
 ) -> Result<(Summary, upetrack_io::result::TrackResult), CliError> {
-    let result = pipeline::track(seq, params, bar)?;
-    let summary = summarise(
-        name,
-        &result,
-        &seq.groundtruth,
-        &seq.camera,
-        seq.first_occluded_frame(),
-    );
+    let (mut rows, result) = evaluate_ropes(seq, name, params, bar)?;
+    let summary = rows
+        .pop()
+        .ok_or_else(|| CliError::input(format!("{name}: no rope to evaluate")))?;
     Ok((summary, result))
+}
+
+/// [`evaluate`] with a row per rope before the row of all of them (one
+/// row for one rope).
+fn evaluate_ropes(
+    seq: &AnySequence,
+    name: &str,
+    params: Params,
+    bar: &indicatif::ProgressBar,
+) -> Result<(Vec<Summary>, upetrack_io::result::TrackResult), CliError> {
+    let result = pipeline::track(seq, params, bar)?;
+    Ok((summarise_ropes(name, &result, seq), result))
+}
+
+/// `true` for a sequence of several ropes.
+fn result_is_several(seq: &AnySequence) -> bool {
+    seq.ropes.len() > 1
 }
 
 /// Writes one CSV row per frame: error, timings, visible nodes, lost.
@@ -368,21 +391,32 @@ fn write_per_frame(
     result: &upetrack_io::result::TrackResult,
     seq: &AnySequence,
 ) -> Result<(), CliError> {
-    let errors = upetrack_io::eval::frame_errors(result, &seq.groundtruth, &seq.camera);
     let mut text =
         String::from("sequence,frame,error_mm,error_px,track_ms,total_ms,visible_nodes,lost\n");
-    for f in &result.frames {
-        let e = errors.iter().find(|e| e.frame == f.frame);
-        text += &format!(
-            "{name},{},{},{},{:.4},{:.4},{},{}\n",
-            f.frame,
-            e.map_or(String::new(), |e| format!("{:.3}", e.mm)),
-            e.map_or(String::new(), |e| format!("{:.3}", e.px)),
-            f.track_ms,
-            f.total_ms,
-            f.visible.iter().filter(|&&v| v).count(),
-            f.lost
-        );
+    // Several ropes: each rope's rows, named `<sequence>/<rope>`.
+    for (k, rope) in seq.ropes.iter().enumerate() {
+        let Some(result) = result.rope(k) else {
+            break;
+        };
+        let label = if result_is_several(seq) {
+            format!("{name}/{}", rope.name)
+        } else {
+            name.to_string()
+        };
+        let errors = upetrack_io::eval::frame_errors(&result, &rope.groundtruth, &seq.camera);
+        for f in &result.frames {
+            let e = errors.iter().find(|e| e.frame == f.frame);
+            text += &format!(
+                "{label},{},{},{},{:.4},{:.4},{},{}\n",
+                f.frame,
+                e.map_or(String::new(), |e| format!("{:.3}", e.mm)),
+                e.map_or(String::new(), |e| format!("{:.3}", e.px)),
+                f.track_ms,
+                f.total_ms,
+                f.visible.iter().filter(|&&v| v).count(),
+                f.lost
+            );
+        }
     }
     upetrack_io::write::write_file(path, text.as_bytes())?;
     Ok(())

@@ -7,7 +7,7 @@ use upetrack_io::synthetic::SyntheticWriter;
 use upetrack_io::write::{write_file, y4m_frame, y4m_header};
 use upetrack_synth::random::DEFAULT_RANDOM_FRAMES;
 use upetrack_synth::variant::D435I_1280X720;
-use upetrack_synth::Scenario;
+use upetrack_synth::{Scenario, SeveralKind, SeveralRopes};
 
 use indicatif::ProgressBar;
 
@@ -57,8 +57,14 @@ fn write_scenario_and_video(
 pub fn cmd_synth(args: &SynthArgs) -> Result<(), CliError> {
     let kind = match args.scenario {
         SynthScenario::Random => return synth_random(args),
+        SynthScenario::Several(kind) => return synth_several(kind, args),
         SynthScenario::Described(kind) => kind,
     };
+    if args.without.is_some() {
+        return Err(CliError::usage(
+            "--without is for scenes of several ropes (`upetrack scenarios` lists them)",
+        ));
+    }
     if args.count.is_some() {
         return Err(CliError::usage(
             "--count is for `synth random`: a described scenario is one folder",
@@ -85,6 +91,55 @@ pub fn cmd_synth(args: &SynthArgs) -> Result<(), CliError> {
     eprintln!(
         "{}: {n} frames of {} written in {:.1} s",
         args.dir.display(),
+        kind.name(),
+        start.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+/// `upetrack synth <several-ropes scene> <dir> [--frames N] [--seed S]
+/// [--without K] [--rope-prior]`: the ropes listed in `dlo.json`, each
+/// with its own ground-truth file.
+fn synth_several(kind: SeveralKind, args: &SynthArgs) -> Result<(), CliError> {
+    let refused = [
+        ("count", args.count.is_some()),
+        ("hd", args.hd),
+        ("variant", args.variant.is_some()),
+        ("depth-noise", args.depth_noise.is_some()),
+        ("y4m", args.y4m.is_some()),
+    ];
+    if let Some((name, _)) = refused.iter().find(|(_, given)| *given) {
+        return Err(CliError::usage(format!(
+            "--{name} does not apply to a scene of several ropes (yet): its camera and ropes are the scene's"
+        )));
+    }
+    let frames = args.frames.map_or(DEFAULT_FRAMES, |n| n as usize);
+    let scene = match args.without {
+        None => SeveralRopes::new(kind, frames, args.seed),
+        Some(k) => SeveralRopes::without(kind, frames, args.seed, k).ok_or_else(|| {
+            CliError::usage(format!(
+                "--without {k}: {} has ropes 0 to {}",
+                kind.name(),
+                kind.rope_count() - 1
+            ))
+        })?,
+    };
+    let start = Instant::now();
+    let bar = progress::bar(frames as u64, "frames", kind.name());
+    let dir = args.dir.as_path();
+    let n = upetrack_io::synthetic_several::write_several(scene, args.rope_prior, &mut |(
+        path,
+        bytes,
+    )| {
+        if path.starts_with("color/") {
+            bar.inc(1);
+        }
+        write_file(&dir.join(path), &bytes)
+    })?;
+    bar.finish_and_clear();
+    eprintln!(
+        "{}: {n} frames of {} written in {:.1} s",
+        dir.display(),
         kind.name(),
         start.elapsed().as_secs_f64()
     );

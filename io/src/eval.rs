@@ -146,6 +146,72 @@ pub struct Summary {
     /// along the viewing ray, millimetres (positive: behind it, farther
     /// from the camera), over every visible node of every frame tracked.
     pub visible_ray_offset_mm: f64,
+    /// With several ropes: how often a rope's nodes came to lie nearer
+    /// another rope's ground truth than its own ([`identity_swaps`]); 0
+    /// for one rope.
+    pub identity_swaps: usize,
+    /// With several ropes: frames where some rope's nodes lie nearer
+    /// another rope's ground truth than its own.
+    pub swapped_frames: usize,
+}
+
+/// How well several ropes kept their identities.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct IdentitySwaps {
+    /// Times a frame with a rope nearer another's ground truth than its
+    /// own followed one without.
+    pub swaps: usize,
+    /// Frames with a rope nearer another's ground truth than its own.
+    pub swapped_frames: usize,
+}
+
+/// Counts identity swaps among `tracks` (each rope's result and ground
+/// truth): a frame is swapped when some rope's nodes have a smaller frame
+/// error (Eq. 18) against another rope's ground truth than against its own.
+pub fn identity_swaps(tracks: &[Track<'_>]) -> IdentitySwaps {
+    let frames = tracks
+        .iter()
+        .map(|t| t.result.frames.len())
+        .max()
+        .unwrap_or(0);
+    let nodes_of = |t: &Track<'_>, f: usize| -> Option<Vec<Vec3>> {
+        let record = t.result.frames.get(f)?;
+        (!record.lost && !record.nodes.is_empty()).then(|| {
+            record
+                .nodes
+                .iter()
+                .map(|p| Vec3::new(p[0], p[1], p[2]))
+                .collect()
+        })
+    };
+    let mut out = IdentitySwaps::default();
+    let mut was = false;
+    for f in 0..frames {
+        let swapped = tracks.iter().enumerate().any(|(k, t)| {
+            let Some(nodes) = nodes_of(t, f) else {
+                return false;
+            };
+            let error = |u: &Track<'_>| {
+                let gt = u.truth.get(f)?.as_ref()?;
+                frame_error(&nodes, gt)
+            };
+            let Some(own) = error(t) else {
+                return false;
+            };
+            tracks
+                .iter()
+                .enumerate()
+                .any(|(j, u)| j != k && error(u).is_some_and(|e| e < own))
+        });
+        if swapped {
+            out.swapped_frames += 1;
+            if !was {
+                out.swaps += 1;
+            }
+        }
+        was = swapped;
+    }
+    out
 }
 
 /// The signed offset of `p` from its nearest point `q` on the polyline
@@ -205,78 +271,147 @@ pub fn summarise(
     camera: &CameraIntrinsics,
     first_occluded: Option<usize>,
 ) -> Summary {
-    let errs = frame_errors(result, truth, camera);
-    let mm: Vec<f64> = errs.iter().map(|e| e.mm).collect();
-    let px: Vec<f64> = errs.iter().map(|e| e.px).collect();
-    let occ: Vec<&FrameError> = match first_occluded {
-        Some(f) => errs.iter().filter(|e| e.frame >= f).collect(),
-        None => Vec::new(),
-    };
-    let clear: Vec<f64> = match first_occluded {
-        Some(f) => errs.iter().filter(|e| e.frame < f).map(|e| e.px).collect(),
-        None => px.clone(),
-    };
-    let length_errors: Vec<f64> = result
-        .frames
-        .iter()
-        .filter(|f| !f.lost)
-        .filter_map(|f| {
-            let gt = truth.get(f.frame)?.as_ref()?;
-            let true_length = upetrack::polyline::polyline_length(gt);
+    summarise_tracks(
+        sequence,
+        &[Track {
+            result,
+            truth,
+            first_occluded,
+        }],
+        camera,
+    )
+}
+
+/// One rope's result with its ground truth, for [`summarise_tracks`].
+#[derive(Debug, Clone, Copy)]
+pub struct Track<'a> {
+    /// The rope's frames.
+    pub result: &'a TrackResult,
+    /// Its ground truth per frame index.
+    pub truth: &'a [Option<Vec<Vec3>>],
+    /// The first frame part of it is hidden.
+    pub first_occluded: Option<usize>,
+}
+
+/// Summarises several ropes' results as one: every statistic over the
+/// frames of all of them (a frame of two ropes counts twice), the frame
+/// count and the times the first's.
+pub fn summarise_tracks(
+    sequence: &str,
+    tracks: &[Track<'_>],
+    camera: &CameraIntrinsics,
+) -> Summary {
+    let (mut mm, mut px, mut occ_mm, mut occ_px, mut clear) =
+        (vec![], vec![], vec![], vec![], vec![]);
+    let (mut length_errors, mut whole_length_errors, mut ray_offsets) = (vec![], vec![], vec![]);
+    let (mut lost, mut recovered, mut last_mm) = (0, 0, f64::NAN);
+    for t in tracks {
+        let errs = frame_errors(t.result, t.truth, camera);
+        mm.extend(errs.iter().map(|e| e.mm));
+        px.extend(errs.iter().map(|e| e.px));
+        last_mm = errs.last().map_or(last_mm, |e| e.mm);
+        if let Some(f) = t.first_occluded {
+            occ_mm.extend(errs.iter().filter(|e| e.frame >= f).map(|e| e.mm));
+            occ_px.extend(errs.iter().filter(|e| e.frame >= f).map(|e| e.px));
+            clear.extend(errs.iter().filter(|e| e.frame < f).map(|e| e.px));
+        } else {
+            clear.extend(errs.iter().map(|e| e.px));
+        }
+        lost += t.result.frames.iter().filter(|f| f.lost).count();
+        recovered += t.result.frames.iter().filter(|f| f.recovered).count();
+        // The hidden runs' and the whole rope's length, and the visible
+        // nodes' offset along the ray.
+        for f in t.result.frames.iter().filter(|f| !f.lost) {
+            let Some(gt) = t.truth.get(f.frame).and_then(|t| t.as_ref()) else {
+                continue;
+            };
             let nodes: Vec<Vec3> = f
                 .nodes
                 .iter()
                 .map(|p| Vec3::new(p[0], p[1], p[2]))
                 .collect();
-            hidden_length_error(&nodes, &f.visible, true_length)
-        })
-        .collect();
-    // The whole rope's length, and the visible nodes' offset along the ray.
-    let mut whole_length_errors = Vec::new();
-    let mut ray_offsets = Vec::new();
-    for f in result.frames.iter().filter(|f| !f.lost) {
-        let Some(gt) = truth.get(f.frame).and_then(|t| t.as_ref()) else {
-            continue;
-        };
-        let nodes: Vec<Vec3> = f
-            .nodes
-            .iter()
-            .map(|p| Vec3::new(p[0], p[1], p[2]))
-            .collect();
-        let true_length = upetrack::polyline::polyline_length(gt);
-        if true_length > 0.0 && nodes.len() > 1 {
-            whole_length_errors
-                .push((upetrack::polyline::polyline_length(&nodes) / true_length - 1.0).abs());
-        }
-        for (p, _) in nodes.iter().zip(&f.visible).filter(|(_, v)| **v) {
-            ray_offsets.extend(ray_offset(p, gt).map(|o| o * 1000.0));
+            let true_length = upetrack::polyline::polyline_length(gt);
+            length_errors.extend(hidden_length_error(&nodes, &f.visible, true_length));
+            if true_length > 0.0 && nodes.len() > 1 {
+                whole_length_errors
+                    .push((upetrack::polyline::polyline_length(&nodes) / true_length - 1.0).abs());
+            }
+            for (p, _) in nodes.iter().zip(&f.visible).filter(|(_, v)| **v) {
+                ray_offsets.extend(ray_offset(p, gt).map(|o| o * 1000.0));
+            }
         }
     }
-    let track: Vec<f64> = result.frames.iter().map(|f| f.track_ms).collect();
-    let total: Vec<f64> = result.frames.iter().map(|f| f.total_ms).collect();
+    let first = tracks.first().map(|t| t.result);
+    let frames = first.map_or(&[][..], |r| r.frames.as_slice());
+    let track: Vec<f64> = frames.iter().map(|f| f.track_ms).collect();
+    let total: Vec<f64> = frames.iter().map(|f| f.total_ms).collect();
+    let largest = |v: &[f64]| v.iter().copied().fold(f64::NAN, f64::max);
     Summary {
         sequence: sequence.to_string(),
-        algorithm: result.algorithm.clone(),
-        frames: result.frames.len(),
-        lost_frames: result.frames.iter().filter(|f| f.lost).count(),
-        recovered_frames: result.frames.iter().filter(|f| f.recovered).count(),
-        evaluated_frames: errs.len(),
+        algorithm: first.map_or(String::new(), |r| r.algorithm.clone()),
+        frames: frames.len(),
+        lost_frames: lost,
+        recovered_frames: recovered,
+        evaluated_frames: mm.len(),
         mm: ErrorStats::of(&mm),
         px: ErrorStats::of(&px),
-        occluded_mean_mm: mean(&occ.iter().map(|e| e.mm).collect::<Vec<_>>()),
-        occluded_mean_px: mean(&occ.iter().map(|e| e.px).collect::<Vec<_>>()),
-        max_mm: mm.iter().copied().fold(f64::NAN, f64::max),
-        final_mm: mm.last().copied().unwrap_or(f64::NAN),
+        occluded_mean_mm: mean(&occ_mm),
+        occluded_mean_px: mean(&occ_px),
+        max_mm: largest(&mm),
+        final_mm: last_mm,
         frames_above_20mm: mm.iter().filter(|&&e| e > FAILURE_THRESHOLD_MM).count(),
         median_track_ms: quantile(&track, 0.5),
         median_total_ms: quantile(&total, 0.5),
-        max_px: px.iter().copied().fold(f64::NAN, f64::max),
+        max_px: largest(&px),
         clear_mean_px: mean(&clear),
-        hidden_length_error_max: length_errors.iter().copied().fold(f64::NAN, f64::max),
+        hidden_length_error_max: largest(&length_errors),
         hidden_length_error_mean: mean(&length_errors),
-        length_error_max: whole_length_errors.iter().copied().fold(f64::NAN, f64::max),
+        length_error_max: largest(&whole_length_errors),
         visible_ray_offset_mm: mean(&ray_offsets),
+        identity_swaps: 0,
+        swapped_frames: 0,
     }
+}
+
+/// The rows of a result of several ropes: one per rope (`<sequence>/<rope
+/// name>`) and one of all of them (`<sequence>/all`, with the identity
+/// swaps); of one rope, its one row.
+pub fn summarise_ropes<S: crate::source::Source>(
+    sequence: &str,
+    result: &TrackResult,
+    seq: &crate::sequence::Sequence<S>,
+) -> Vec<Summary> {
+    let (ropes, camera) = (&seq.ropes, &seq.camera);
+    let results: Vec<TrackResult> = (0..result.rope_count())
+        .filter_map(|k| result.rope(k))
+        .collect();
+    let tracks: Vec<Track<'_>> = results
+        .iter()
+        .zip(ropes.iter().enumerate())
+        .map(|(r, (k, rope))| Track {
+            result: r,
+            truth: &rope.groundtruth,
+            first_occluded: seq.first_occluded_frame_of(k),
+        })
+        .collect();
+    if result.ropes.is_empty() {
+        return tracks
+            .first()
+            .map(|t| summarise(sequence, t.result, t.truth, camera, t.first_occluded))
+            .into_iter()
+            .collect();
+    }
+    let mut rows: Vec<Summary> = tracks
+        .iter()
+        .zip(ropes)
+        .map(|(t, rope)| summarise_tracks(&format!("{sequence}/{}", rope.name), &[*t], camera))
+        .collect();
+    let mut all = summarise_tracks(&format!("{sequence}/all"), &tracks, camera);
+    let swaps = identity_swaps(&tracks);
+    all.identity_swaps = swaps.swaps;
+    all.swapped_frames = swaps.swapped_frames;
+    rows.push(all);
+    rows
 }
 
 #[cfg(test)]

@@ -17,10 +17,12 @@ pub mod params_schema;
 pub mod recorded;
 pub mod recording_info;
 pub mod result;
+pub mod ropes;
 pub mod run;
 pub mod sequence;
 pub mod source;
 pub mod synthetic;
+pub mod synthetic_several;
 pub mod write;
 
 pub use error::SequenceError;

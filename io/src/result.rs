@@ -42,8 +42,45 @@ pub struct TrackResult {
     pub algorithm: String,
     /// Parameters in force.
     pub params: Params,
+    /// One entry per frame, in order (of the first rope, when there are
+    /// several).
+    pub frames: Vec<FrameRecord>,
+    /// With several ropes, every rope's frames, the first's repeating
+    /// `frames` (an extension; absent for one rope).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub ropes: Vec<RopeResult>,
+}
+
+/// One rope's frames in a result of several ropes.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct RopeResult {
+    /// The rope's name (`dlo.json`'s).
+    pub name: String,
     /// One entry per frame, in order.
     pub frames: Vec<FrameRecord>,
+}
+
+impl TrackResult {
+    /// Number of ropes tracked.
+    pub fn rope_count(&self) -> usize {
+        self.ropes.len().max(1)
+    }
+
+    /// Rope `k`'s frames as a result of one rope (the result itself for
+    /// the first rope of a one-rope result); `None` past the last rope.
+    pub fn rope(&self, k: usize) -> Option<TrackResult> {
+        let frames = match (self.ropes.is_empty(), k) {
+            (true, 0) => self.frames.clone(),
+            (true, _) => return None,
+            (false, k) => self.ropes.get(k)?.frames.clone(),
+        };
+        Some(TrackResult {
+            algorithm: self.algorithm.clone(),
+            params: self.params,
+            frames,
+            ropes: Vec::new(),
+        })
+    }
 }
 
 /// Reads a result file: this project's, or another tracker's written in the
@@ -54,7 +91,19 @@ pub fn read_result(path: &std::path::Path) -> Result<TrackResult, crate::Sequenc
     let text = std::fs::read_to_string(path).map_err(|e| crate::write::io_err(path, e))?;
     let result: TrackResult =
         serde_json::from_str(&text).map_err(|e| crate::write::json_error(&name, e))?;
-    for f in &result.frames {
+    if result.ropes.len() > upetrack::tracker::MAX_ROPES {
+        return Err(crate::SequenceError::too_large(
+            name,
+            "number of ropes",
+            result.ropes.len() as u64,
+            upetrack::tracker::MAX_ROPES as u64,
+        ));
+    }
+    let every_frame = result
+        .frames
+        .iter()
+        .chain(result.ropes.iter().flat_map(|r| &r.frames));
+    for f in every_frame {
         if f.nodes.iter().flatten().any(|c| !c.is_finite()) {
             return Err(crate::SequenceError::invalid(
                 &name,

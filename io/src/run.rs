@@ -2,10 +2,10 @@
 //! supplied by the caller (the core has none; the browser's differs).
 
 use upetrack::tracker::{FrameOutput, FrameStatus, Observation};
-use upetrack::{Params, Tracker};
+use upetrack::{MultiTracker, Params, Tracker};
 
 use crate::error::SequenceError;
-use crate::result::{FrameRecord, TrackResult};
+use crate::result::{FrameRecord, RopeResult, TrackResult};
 use crate::sequence::{DecodedFrame, Sequence};
 use crate::source::Source;
 
@@ -67,20 +67,25 @@ pub fn track_frame(
 /// The result JSON's record of frame `index` (the one definition of it:
 /// the command writes it, the page keeps it per frame).
 pub fn frame_record(index: usize, t: &TimedFrame) -> FrameRecord {
-    let reason = match &t.output.status {
+    output_record(index, &t.output, t.track_ms, t.total_ms)
+}
+
+/// The record of frame `index` from a tracker's `output` and its times.
+fn output_record(index: usize, output: &FrameOutput, track_ms: f64, total_ms: f64) -> FrameRecord {
+    let reason = match &output.status {
         FrameStatus::Lost(r) => Some(r.to_string()),
         _ => None,
     };
     FrameRecord {
         frame: index,
-        nodes: t.output.nodes.iter().map(|p| [p.x, p.y, p.z]).collect(),
-        visible: t.output.visible.clone(),
-        track_ms: t.track_ms,
-        total_ms: t.total_ms,
+        nodes: output.nodes.iter().map(|p| [p.x, p.y, p.z]).collect(),
+        visible: output.visible.clone(),
+        track_ms,
+        total_ms,
         lost: reason.is_some(),
         reason,
-        recovered: t.output.status == FrameStatus::Recovered,
-        init: t.output.init.clone(),
+        recovered: output.status == FrameStatus::Recovered,
+        init: output.init.clone(),
     }
 }
 
@@ -93,30 +98,72 @@ pub fn track_result(params: Params, mut frames: Vec<FrameRecord>) -> TrackResult
         algorithm: params.algorithm.name().to_string(),
         params,
         frames,
+        ropes: Vec::new(),
     }
+}
+
+/// Several ropes' records of one frame, timed as one: `total_ms` from the
+/// decoded images to every rope's step, `track_ms` everything after
+/// segmentation (sharing the pixels, the clouds and every rope's step),
+/// the same on each rope's record.
+pub fn track_frame_several(
+    ropes: &mut MultiTracker,
+    index: usize,
+    frame: &upetrack::Frame<'_>,
+    occlusions: &[upetrack::Rect],
+    now_ms: &mut dyn FnMut() -> f64,
+) -> Result<Vec<FrameRecord>, upetrack::tracker::TrackerError> {
+    let t0 = now_ms();
+    let masks = ropes.segment(frame, occlusions)?;
+    let t1 = now_ms();
+    let outputs = ropes.update(frame, &masks, occlusions);
+    let t2 = now_ms();
+    Ok(outputs
+        .iter()
+        .map(|output| output_record(index, output, t2 - t1, t2 - t0))
+        .collect())
+}
+
+/// What tracks a sequence: one rope, or several.
+enum Runner {
+    One(Box<Tracker>),
+    Several {
+        ropes: Box<MultiTracker>,
+        names: Vec<String>,
+    },
 }
 
 /// The tracking half of a run over a sequence: decoded frames in, in
 /// order, the result out. [`track_sequence`] feeds it from the same
 /// thread; the command feeds it from a thread that decodes ahead.
 pub struct SequenceRun {
-    tracker: Tracker,
+    runner: Runner,
     params: Params,
     depth_scale: f64,
-    records: Vec<FrameRecord>,
+    /// Each rope's records, in the sequence's order of ropes.
+    records: Vec<Vec<FrameRecord>>,
 }
 
 impl SequenceRun {
-    /// A run of `params` over `seq` (its camera, colour range, rope prior).
+    /// A run of `params` over `seq` (its camera, and each rope's colour
+    /// range and prior).
     pub fn new<S: Source>(seq: &Sequence<S>, params: Params) -> Result<Self, SequenceError> {
-        let tracker = seq
-            .tracker(params)
-            .map_err(|e| SequenceError::invalid("parameters", e.to_string()))?;
+        let invalid = |e: upetrack::tracker::TrackerError| {
+            SequenceError::invalid("parameters", e.to_string())
+        };
+        let runner = if seq.ropes.len() > 1 {
+            Runner::Several {
+                ropes: Box::new(seq.multi_tracker(params).map_err(invalid)?),
+                names: seq.ropes.iter().map(|r| r.name.clone()).collect(),
+            }
+        } else {
+            Runner::One(Box::new(seq.tracker(params).map_err(invalid)?))
+        };
         Ok(Self {
-            tracker,
+            runner,
             params,
             depth_scale: seq.depth_scale,
-            records: Vec::with_capacity(seq.len()),
+            records: vec![Vec::with_capacity(seq.len()); seq.ropes.len().max(1)],
         })
     }
 
@@ -131,21 +178,38 @@ impl SequenceRun {
         let frame = decoded
             .frame(self.depth_scale)
             .map_err(|e| SequenceError::invalid(name, e.to_string()))?;
-        let record = track_frame(
-            &mut self.tracker,
-            self.records.len(),
-            &frame,
-            occlusions,
-            now_ms,
-        )
+        let index = self.records[0].len();
+        let records = match &mut self.runner {
+            Runner::One(tracker) => {
+                track_frame(tracker, index, &frame, occlusions, now_ms).map(|r| vec![r])
+            }
+            Runner::Several { ropes, .. } => {
+                track_frame_several(ropes, index, &frame, occlusions, now_ms)
+            }
+        }
         .map_err(|e| SequenceError::invalid(name, e.to_string()))?;
-        self.records.push(record);
+        for (kept, record) in self.records.iter_mut().zip(records) {
+            kept.push(record);
+        }
         Ok(())
     }
 
     /// The result of the frames pushed so far.
     pub fn finish(self) -> TrackResult {
-        track_result(self.params, self.records)
+        let mut ropes = self.records.into_iter();
+        let first = ropes.next().unwrap_or_default();
+        let mut result = track_result(self.params, first.clone());
+        if let Runner::Several { names, .. } = self.runner {
+            result.ropes = names
+                .into_iter()
+                .zip(core::iter::once(first).chain(ropes))
+                .map(|(name, frames)| RopeResult {
+                    name,
+                    frames: track_result(self.params, frames).frames,
+                })
+                .collect();
+        }
+        result
     }
 }
 

@@ -6,12 +6,13 @@ use std::cell::RefCell;
 use serde::{Deserialize, Serialize};
 use upetrack::math::Vec3;
 use upetrack::perception::initialisation::RopePrior;
-use upetrack::tracker::TrackerError;
-use upetrack::{CameraIntrinsics, Frame, HsvRange, Params, Rect, Tracker};
+use upetrack::tracker::{TrackerError, MAX_ROPES};
+use upetrack::{CameraIntrinsics, Frame, HsvRange, MultiTracker, Params, Rect, Tracker};
 
 use crate::decode::{decode_color, decode_depth, DepthImage, RgbImage};
 use crate::error::SequenceError;
 use crate::recording_info::RecordingInfo;
+pub use crate::ropes::{RopeEntry, SequenceRope};
 use crate::source::{is_inside_name, Source};
 
 /// Most frames accepted in one sequence.
@@ -161,6 +162,14 @@ pub struct DloConfig {
     /// What the user knows of the rope.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rope: Option<RopeConfig>,
+    /// Several ropes, each with what is its own (an extension; absent or
+    /// empty: the one rope the keys above describe).
+    #[serde(
+        default,
+        skip_serializing_if = "Vec::is_empty",
+        deserialize_with = "crate::capped::vec::<_, _, MAX_ROPES>"
+    )]
+    pub ropes: Vec<RopeEntry>,
 }
 
 impl DloConfig {
@@ -210,6 +219,7 @@ impl DloConfig {
                 .validate()
                 .map_err(|e| SequenceError::invalid(path, format!("rope: {e}")))?;
         }
+        crate::ropes::check_ropes(self, path)?;
         if let Some(gt) = &self.groundtruth {
             if !is_inside_name(gt) {
                 return Err(SequenceError::invalid(
@@ -250,6 +260,56 @@ pub struct GroundTruthFile {
     /// Frames with a reference (any may be missing).
     #[serde(deserialize_with = "crate::capped::vec::<_, _, MAX_FRAMES>")]
     pub frames: Vec<GroundTruthFrame>,
+}
+
+/// Reads the ground truth `name` for a sequence of `frames` frames: the
+/// points per frame and whether an occluder hides some of them. A missing
+/// file is an error only when `named` (by `dlo.json`).
+pub(crate) fn read_groundtruth<S: Source>(
+    source: &S,
+    name: &str,
+    named: bool,
+    frames: usize,
+) -> Result<(Vec<Option<Vec<Vec3>>>, Vec<bool>), SequenceError> {
+    let mut groundtruth = vec![None; frames];
+    let mut groundtruth_occluded = vec![false; frames];
+    if source.is_file(name) {
+        let gt: GroundTruthFile = read_json(source, name)?;
+        let gt_path = source.display(name);
+        for f in gt.frames {
+            if f.points.len() > MAX_GROUNDTRUTH_POINTS {
+                return Err(SequenceError::too_large(
+                    gt_path,
+                    "ground-truth points in one frame",
+                    f.points.len() as u64,
+                    MAX_GROUNDTRUTH_POINTS as u64,
+                ));
+            }
+            if f.points.iter().flatten().any(|c| !c.is_finite()) {
+                return Err(SequenceError::invalid(
+                    &gt_path,
+                    format!("frame {}: non-finite point", f.frame),
+                ));
+            }
+            if let Some(slot) = groundtruth_occluded.get_mut(f.frame) {
+                *slot = f.occluded.iter().any(|&o| o);
+            }
+            if let Some(slot) = groundtruth.get_mut(f.frame) {
+                *slot = Some(
+                    f.points
+                        .iter()
+                        .map(|p| Vec3::new(p[0], p[1], p[2]))
+                        .collect(),
+                );
+            }
+        }
+    } else if named {
+        return Err(SequenceError::Missing {
+            path: source.display(name),
+            what: "ground truth named in dlo.json",
+        });
+    }
+    Ok((groundtruth, groundtruth_occluded))
 }
 
 /// A decoded colour/depth pair.
@@ -308,6 +368,10 @@ pub struct Sequence<S: Source> {
     pub groundtruth: Vec<Option<Vec<Vec3>>>,
     /// Per frame index: the ground truth says an occluder hides part of the rope.
     pub groundtruth_occluded: Vec<bool>,
+    /// Every rope to track: the one of `dlo.json`'s top-level keys, or
+    /// those of its `ropes` (the first's colour, ground truth and prior
+    /// are then also `hsv`, `groundtruth` and `rope_prior`'s).
+    pub ropes: Vec<SequenceRope>,
     /// Relative paths of colour frames, name-sorted.
     pub color_files: Vec<String>,
     /// Relative paths of depth frames, name-sorted.
@@ -569,45 +633,18 @@ impl<S: Source> Sequence<S> {
             .groundtruth
             .clone()
             .unwrap_or_else(|| "groundtruth.json".to_string());
-        let mut groundtruth = vec![None; color_files.len()];
-        let mut groundtruth_occluded = vec![false; color_files.len()];
-        if source.is_file(&gt_name) {
-            let gt: GroundTruthFile = read_json(&source, &gt_name)?;
-            let gt_path = source.display(&gt_name);
-            for f in gt.frames {
-                if f.points.len() > MAX_GROUNDTRUTH_POINTS {
-                    return Err(SequenceError::too_large(
-                        gt_path,
-                        "ground-truth points in one frame",
-                        f.points.len() as u64,
-                        MAX_GROUNDTRUTH_POINTS as u64,
-                    ));
-                }
-                if f.points.iter().flatten().any(|c| !c.is_finite()) {
-                    return Err(SequenceError::invalid(
-                        &gt_path,
-                        format!("frame {}: non-finite point", f.frame),
-                    ));
-                }
-                if let Some(slot) = groundtruth_occluded.get_mut(f.frame) {
-                    *slot = f.occluded.iter().any(|&o| o);
-                }
-                if let Some(slot) = groundtruth.get_mut(f.frame) {
-                    *slot = Some(
-                        f.points
-                            .iter()
-                            .map(|p| Vec3::new(p[0], p[1], p[2]))
-                            .collect(),
-                    );
-                }
-            }
-        } else if config.groundtruth.is_some() {
-            return Err(SequenceError::Missing {
-                path: source.display(&gt_name),
-                what: "ground truth named in dlo.json",
-            });
-        }
-
+        let frames = color_files.len();
+        let (groundtruth, groundtruth_occluded) =
+            read_groundtruth(&source, &gt_name, config.groundtruth.is_some(), frames)?;
+        let ropes = crate::ropes::sequence_ropes(&source, &config, hsv, frames, |k| {
+            (k == 0).then(|| (groundtruth.clone(), groundtruth_occluded.clone()))
+        })?;
+        // The first rope's are the sequence's (readers of one rope).
+        let hsv = ropes.first().map_or(hsv, |r| r.hsv);
+        let (groundtruth, groundtruth_occluded) = match ropes.first() {
+            Some(r) => (r.groundtruth.clone(), r.groundtruth_occluded.clone()),
+            None => (groundtruth, groundtruth_occluded),
+        };
         Ok(Self {
             source,
             camera,
@@ -617,6 +654,7 @@ impl<S: Source> Sequence<S> {
             config,
             groundtruth,
             groundtruth_occluded,
+            ropes,
             color_files,
             depth_files,
             reader,
@@ -651,16 +689,40 @@ impl<S: Source> Sequence<S> {
         rect.chain(truth).min()
     }
 
-    /// What `dlo.json` says of the rope (nothing when absent).
-    pub fn rope_prior(&self) -> RopePrior {
-        self.config.rope.map(|r| r.prior()).unwrap_or_default()
+    /// [`Sequence::first_occluded_frame`] for rope `k`: a rectangle, or a
+    /// frame whose ground truth of that rope marks points hidden.
+    pub fn first_occluded_frame_of(&self, k: usize) -> Option<usize> {
+        let rect = self.config.occlusions.iter().map(|o| o.frames[0] as usize);
+        let truth = self.ropes.get(k).and_then(|r| r.first_occluded_frame());
+        rect.chain(truth).min()
     }
 
-    /// A tracker for this sequence: its camera, colour range and rope prior.
+    /// What `dlo.json` says of the rope (nothing when absent).
+    pub fn rope_prior(&self) -> RopePrior {
+        self.ropes.first().map(|r| r.prior).unwrap_or_default()
+    }
+
+    /// A tracker for this sequence: its camera, colour range and rope prior
+    /// (of the first rope, when `dlo.json` lists several).
     pub fn tracker(&self, params: Params) -> Result<Tracker, TrackerError> {
         let mut t = Tracker::new(params, self.camera, self.hsv)?;
         t.set_rope_prior(self.rope_prior())?;
         Ok(t)
+    }
+
+    /// A tracker of every rope of this sequence, each with its colour
+    /// range and prior (one rope: [`Sequence::tracker`]'s, alone).
+    pub fn multi_tracker(&self, params: Params) -> Result<MultiTracker, TrackerError> {
+        let trackers = self
+            .ropes
+            .iter()
+            .map(|r| {
+                let mut t = Tracker::new(params, self.camera, r.hsv)?;
+                t.set_rope_prior(r.prior)?;
+                Ok(t)
+            })
+            .collect::<Result<Vec<_>, TrackerError>>()?;
+        MultiTracker::new(trackers)
     }
 
     /// When frame `index` was taken, seconds: a recording's own colour

@@ -91,6 +91,7 @@ impl SyntheticWriter {
                 length_m: Some(s.rope.settings.length),
                 diameter_m: Some(s.rope.settings.thickness),
             }),
+            ropes: Vec::new(),
         };
         let mut files = vec![
             json(
@@ -122,22 +123,11 @@ impl SyntheticWriter {
             return Ok(None);
         };
         see(&f)?;
-        let name = format!("{:06}", f.index);
-        let jpg = encode_jpeg(camera.width, camera.height, &f.rgb, self.jpeg_quality)?;
-        let png = encode_depth_png(camera.width, camera.height, &f.depth)?;
-        self.groundtruth.frames.push(GroundTruthFrame {
-            frame: f.index,
-            points: f.groundtruth.iter().map(|p| [p.x, p.y, p.z]).collect(),
-            occluded: if f.occluded.iter().any(|&o| o) {
-                f.occluded
-            } else {
-                Vec::new()
-            },
-        });
-        Ok(Some([
-            (format!("color/{name}.jpg"), jpg),
-            (format!("depth/{name}.png"), png),
-        ]))
+        let files = frame_files(f.index, &camera, &f.rgb, &f.depth, self.jpeg_quality)?;
+        self.groundtruth
+            .frames
+            .push(truth_frame(f.index, &f.groundtruth, f.occluded));
+        Ok(Some(files))
     }
 
     /// `groundtruth.json` of the frames written so far, without
@@ -150,6 +140,41 @@ impl SyntheticWriter {
     /// Frames written so far.
     pub fn written(&self) -> usize {
         self.groundtruth.frames.len()
+    }
+}
+
+/// Frame `index`'s colour JPEG (at `quality`) and depth PNG.
+pub(crate) fn frame_files(
+    index: usize,
+    camera: &upetrack::CameraIntrinsics,
+    rgb: &[u8],
+    depth: &[u16],
+    quality: u8,
+) -> Result<[SequenceFile; 2], SequenceError> {
+    let name = format!("{index:06}");
+    let jpg = encode_jpeg(camera.width, camera.height, rgb, quality)?;
+    let png = encode_depth_png(camera.width, camera.height, depth)?;
+    Ok([
+        (format!("color/{name}.jpg"), jpg),
+        (format!("depth/{name}.png"), png),
+    ])
+}
+
+/// Frame `index` of a ground-truth file (`occluded` kept only when some
+/// point is hidden).
+pub(crate) fn truth_frame(
+    index: usize,
+    points: &[upetrack::Vec3],
+    occluded: Vec<bool>,
+) -> GroundTruthFrame {
+    GroundTruthFrame {
+        frame: index,
+        points: points.iter().map(|p| [p.x, p.y, p.z]).collect(),
+        occluded: if occluded.iter().any(|&o| o) {
+            occluded
+        } else {
+            Vec::new()
+        },
     }
 }
 

@@ -1,7 +1,8 @@
 //! Synthetic RGB-D sequences of a rope seen by a RealSense D435i, with exact
 //! ground truth: a position-based (XPBD-style) rope simulation on a table,
 //! a ray-casting renderer (capsule chain, table, occluder boxes) with a
-//! D435i-like depth noise model, and the named scenarios of the evaluation.
+//! D435i-like depth noise model, and the named scenarios of the evaluation
+//! (of one rope, and of several: [`several`]).
 //!
 //! `no_std` with `alloc`, like the core, so that it also runs in a browser.
 #![no_std]
@@ -17,12 +18,14 @@ pub mod random;
 pub mod render;
 pub mod rope;
 pub mod scenario;
+pub mod several;
 pub mod variant;
 
 pub use random::{RandomScene, SeedRange};
 pub use render::{RenderSettings, Rendered};
 pub use rope::{Rope, RopeSettings};
 pub use scenario::{Scenario, ScenarioKind, SceneKnobs, SynthFrame, SIMULATOR_VERSION};
+pub use several::{SeveralFrame, SeveralKind, SeveralRopes};
 pub use variant::Variant;
 
 /// Most frames one scenario records.

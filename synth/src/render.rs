@@ -309,6 +309,31 @@ pub fn hidden_by_boxes(
     })
 }
 
+/// `true` when another rope (`others`, world frame) lies between the
+/// camera and the near side of the rope at `point` (world frame, radius
+/// `radius`): the near side's centre, so a rope merely grazed at its edge
+/// still counts as seen.
+pub fn hidden_by_ropes(
+    settings: &RenderSettings,
+    point: &Vec3,
+    radius: f64,
+    others: &[RopeLook<'_>],
+) -> bool {
+    let pose = settings.pose();
+    let to = point - pose.centre;
+    let dist = math::norm(&to);
+    if !(dist > radius) {
+        return false;
+    }
+    let dir = to / dist;
+    others.iter().any(|o| {
+        o.particles.windows(2).any(|s| {
+            ray_capsule(&dir, &(s[0] - pose.centre), &(s[1] - pose.centre), o.radius)
+                .is_some_and(|(t, _)| t < dist - radius)
+        })
+    })
+}
+
 /// Smooth value noise in [0, 1] on a lattice of `cell` metres (table texture).
 fn value_noise(x: f64, y: f64, cell: f64, seed: u64) -> f64 {
     let hash = |i: i64, j: i64| {

@@ -15,7 +15,7 @@ use crate::perception::evidence::Evidence;
 use crate::perception::frame::{Frame, FrameError};
 use crate::perception::initialisation::{
     initialise, one_rope_thick, InitError, InitGuide, InitReport, Initialisation, PriorError,
-    RopePrior, DIAMETER_PRIOR_FACTOR,
+    RopePrior, TakenRope, DIAMETER_PRIOR_FACTOR,
 };
 use crate::perception::point_cloud::build_cloud;
 use crate::perception::segmentation::{
@@ -183,9 +183,22 @@ pub struct Observation {
     pub occlusions: Vec<Rect>,
     /// Mask pixels in parts too wide to be the rope, left out of `cloud`.
     pub too_wide: usize,
-    /// Pixels of the other ropes tracked in the frame ([`MultiTracker`]),
-    /// which hide this one as an occluder does; `None` for one rope.
-    pub others: Option<Mask>,
+    /// What the other ropes tracked in the frame ([`MultiTracker`])
+    /// leave this one; `None` for one rope.
+    pub others: Option<OtherRopes>,
+}
+
+/// What the other ropes tracked in the same frame leave a rope.
+#[derive(Debug, Clone)]
+pub struct OtherRopes {
+    /// Their pixels: they hide this rope as an occluder does.
+    pub pixels: Mask,
+    /// Every pixel of this rope's colour, theirs included: initialisation
+    /// looks for this rope among all the candidates of its colour (so a
+    /// crossing with another rope is walked straight through)...
+    pub colour: Mask,
+    /// ...and leaves the candidates lying along these ropes to them.
+    pub taken: Vec<TakenRope>,
 }
 
 impl Observation {
@@ -700,7 +713,7 @@ impl Tracker {
                 occlusions: &obs.occlusions,
                 camera,
                 radius: self.radius(),
-                others: obs.others.as_ref(),
+                others: obs.others.as_ref().map(|o| &o.pixels),
             }),
             rest_length: self.rest_length,
         }
@@ -764,13 +777,18 @@ impl Tracker {
         };
         // A click chooses the rope on the frame it was made on (a tracker
         // without a state); after a loss the rope is found near where it was.
+        let (mask, taken) = match &obs.others {
+            Some(o) => (&o.colour, o.taken.as_slice()),
+            None => (&obs.mask, &[][..]),
+        };
         let guide = InitGuide {
             prior: self.prior,
             hint: self.hint.filter(|_| self.state.is_none()),
             previous,
             min_length: known.map_or(0.0, |k| self.params.reinit_length_fraction * k),
+            taken,
         };
-        let init = initialise(frame, &obs.mask, &self.camera, &self.params.init(), &guide)
+        let init = initialise(frame, mask, &self.camera, &self.params.init(), &guide)
             .map_err(ReinitFailure::Init)?;
         if let Some(known) = known {
             if init.length < self.params.reinit_length_fraction * known {

@@ -4,10 +4,12 @@
 
 use alloc::vec::Vec;
 
-use super::{FrameOutput, Observation, Tracker, TrackerError, UNEXPLAINED_REACH};
+use super::{FrameOutput, Observation, OtherRopes, Tracker, TrackerError, UNEXPLAINED_REACH};
+use crate::math::Vec2;
 use crate::perception::frame::Frame;
+use crate::perception::initialisation::TakenRope;
 use crate::perception::segmentation::{Mask, Rect};
-use crate::perception::sharing::{share_pixels, RopeLine};
+use crate::perception::sharing::{share_pixels, PixelShare, RopeLine};
 
 /// Most ropes one [`MultiTracker`] follows: the sharing of pixels costs
 /// each pixel a look at every rope's nodes.
@@ -60,16 +62,35 @@ impl MultiTracker {
 
     /// Tracks every rope on `frame` (with `occlusions` blacked out): one
     /// output per rope, in order. Fails only on a frame that does not fit
-    /// the camera.
+    /// the camera. [`MultiTracker::segment`] then [`MultiTracker::update`].
     pub fn process(
         &mut self,
         frame: &Frame<'_>,
         occlusions: &[Rect],
     ) -> Result<Vec<FrameOutput>, TrackerError> {
-        if let [only] = self.ropes.as_mut_slice() {
-            return Ok(alloc::vec![only.process(frame, occlusions)?]);
-        }
         let masks = self.segment(frame, occlusions)?;
+        Ok(self.update(frame, &masks, occlusions))
+    }
+
+    /// The tracking of every rope on `frame`, from
+    /// [`MultiTracker::segment`]'s masks of it (a rope without one sees
+    /// nothing of its colour).
+    pub fn update(
+        &mut self,
+        frame: &Frame<'_>,
+        masks: &[Mask],
+        occlusions: &[Rect],
+    ) -> Vec<FrameOutput> {
+        let empty = Mask::new(frame.width, frame.height);
+        let masks: Vec<&Mask> = (0..self.ropes.len())
+            .map(|k| masks.get(k).unwrap_or(&empty))
+            .collect();
+        if let ([only], [mask]) = (self.ropes.as_mut_slice(), masks.as_slice()) {
+            // One rope: exactly `Tracker::process`.
+            let cloud = only.cloud(frame, mask);
+            let obs = Observation::new((*mask).clone(), cloud, occlusions);
+            return alloc::vec![only.update(frame, &obs)];
+        }
         let mut outputs: Vec<Option<FrameOutput>> = self.ropes.iter().map(|_| None).collect();
         // Tracked ropes step on the shares of their last states...
         let tracked: Vec<usize> = (0..self.ropes.len())
@@ -77,8 +98,8 @@ impl MultiTracker {
             .collect();
         if !tracked.is_empty() {
             let shares = self.share(frame, &masks);
-            for (&k, share) in tracked.iter().zip(tracked.iter().map(|&k| &shares[k])) {
-                let obs = self.observation(k, frame, share, occlusions);
+            for &k in &tracked {
+                let obs = self.observation(k, frame, &shares[k], masks[k], occlusions);
                 outputs[k] = Some(self.ropes[k].update(frame, &obs));
             }
         }
@@ -89,14 +110,19 @@ impl MultiTracker {
                 continue;
             }
             let shares = self.share(frame, &masks);
-            let obs = self.observation(k, frame, &shares[k], occlusions);
+            let obs = self.observation(k, frame, &shares[k], masks[k], occlusions);
             outputs[k] = Some(self.ropes[k].update(frame, &obs));
         }
-        Ok(outputs.into_iter().flatten().collect())
+        outputs.into_iter().flatten().collect()
     }
 
-    /// Each rope's colour mask; ropes of one colour range share one.
-    fn segment(&self, frame: &Frame<'_>, occlusions: &[Rect]) -> Result<Vec<Mask>, TrackerError> {
+    /// Each rope's colour mask, with `occlusions` blacked out; ropes of one
+    /// colour range share one.
+    pub fn segment(
+        &self,
+        frame: &Frame<'_>,
+        occlusions: &[Rect],
+    ) -> Result<Vec<Mask>, TrackerError> {
         let mut masks: Vec<Mask> = Vec::with_capacity(self.ropes.len());
         for (k, rope) in self.ropes.iter().enumerate() {
             let same = self.ropes[..k].iter().position(|r| r.hsv() == rope.hsv());
@@ -109,11 +135,7 @@ impl MultiTracker {
     }
 
     /// The pixels shared out between the ropes as they stand now.
-    fn share(
-        &self,
-        frame: &Frame<'_>,
-        masks: &[Mask],
-    ) -> Vec<crate::perception::sharing::PixelShare> {
+    fn share(&self, frame: &Frame<'_>, masks: &[&Mask]) -> Vec<PixelShare> {
         let lines: Vec<Option<RopeLine<'_>>> = self
             .ropes
             .iter()
@@ -124,27 +146,53 @@ impl MultiTracker {
                 })
             })
             .collect();
-        let refs: Vec<&Mask> = masks.iter().collect();
+        // A point a node explains ([`UNEXPLAINED_REACH`]) is that rope's.
         let reach = self
             .ropes
             .iter()
             .map(|t| UNEXPLAINED_REACH * t.params().visibility_radius)
             .fold(0.0, f64::max);
-        share_pixels(frame, self.ropes[0].camera(), &refs, &lines, reach)
+        share_pixels(frame, self.ropes[0].camera(), masks, &lines, reach)
     }
 
-    /// Rope `k`'s observation of its share.
+    /// Rope `k`'s observation of its share (`colour`: its colour mask).
     fn observation(
         &self,
         k: usize,
         frame: &Frame<'_>,
-        share: &crate::perception::sharing::PixelShare,
+        share: &PixelShare,
+        colour: &Mask,
         occlusions: &[Rect],
     ) -> Observation {
         let rope = &self.ropes[k];
         let cloud = rope.cloud(frame, &share.own);
         let mut obs = Observation::new(share.own.clone(), cloud, occlusions);
-        obs.others = Some(share.others.clone());
+        let camera = rope.camera();
+        let focal = camera.fx.max(camera.fy);
+        let taken = self
+            .ropes
+            .iter()
+            .enumerate()
+            .filter(|(j, t)| *j != k && t.is_tracking())
+            .map(|(_, t)| {
+                let line: Vec<Vec2> = t.nodes().iter().filter_map(|p| camera.project(p)).collect();
+                let depth =
+                    t.nodes().iter().map(|p| p.z).sum::<f64>() / t.nodes().len().max(1) as f64;
+                TakenRope {
+                    line,
+                    radius_px: if depth > 0.0 {
+                        t.radius() * focal / depth
+                    } else {
+                        0.0
+                    },
+                }
+            })
+            .collect();
+        obs.others = Some(OtherRopes {
+            pixels: share.others.clone(),
+            colour: colour.clone(),
+            taken,
+        });
         obs
     }
 }

@@ -81,7 +81,47 @@ pub enum InitError {
     /// No valid depth anywhere along the centre line.
     #[error("no valid depth along the rope's centre line")]
     NoDepth,
+    /// Every rope-shaped candidate is one of the other ropes tracked.
+    #[error("every rope-shaped candidate ({candidates}) is another rope already tracked")]
+    AllTaken {
+        /// Candidates looked at.
+        candidates: usize,
+    },
 }
+
+/// Another rope tracked in the same frame, as initialisation sees it: a
+/// candidate lying along it is that rope, not this one.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TakenRope {
+    /// Its nodes projected into the image, pixels.
+    pub line: Vec<Vec2>,
+    /// Its radius in the image, pixels.
+    pub radius_px: f64,
+}
+
+impl TakenRope {
+    /// `true` when more than half of `points` (a candidate's centre line,
+    /// pixels) lie within this rope's radius of its projected axis: two
+    /// ropes' axes are never closer than the sum of their radii, except
+    /// where one crosses over the other.
+    pub fn covers(&self, points: &[Vec2]) -> bool {
+        let reach = self.radius_px.max(MIN_TAKEN_REACH_PX);
+        let on = points
+            .iter()
+            .filter(|p| {
+                self.line.windows(2).any(|s| {
+                    let t = crate::math::nearest_on_segment(*p, &s[0], &s[1]);
+                    (*p - (s[0] + (s[1] - s[0]) * t)).norm() <= reach
+                })
+            })
+            .count();
+        2 * on > points.len()
+    }
+}
+
+/// Smallest reach of [`TakenRope::covers`], pixels: a thin rope's axis is
+/// found to about a pixel.
+pub const MIN_TAKEN_REACH_PX: f64 = 1.5;
 
 /// Why a rope is invalid as a prior.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
@@ -134,6 +174,9 @@ pub struct InitGuide<'a> {
     pub previous: &'a [Vec3],
     /// Shortest candidate worth taking near `previous`, metres.
     pub min_length: f64,
+    /// The other ropes tracked in this frame: candidates along them are
+    /// theirs.
+    pub taken: &'a [TakenRope],
 }
 
 /// A fresh set of nodes for the rope in this frame.
@@ -291,13 +334,24 @@ impl Found {
     }
 
     /// The candidate to take, and why.
-    fn choose(&self, guide: &InitGuide<'_>) -> (usize, ChoiceRule, bool) {
+    fn choose(&self, guide: &InitGuide<'_>) -> Result<(usize, ChoiceRule, bool), InitError> {
+        let free: Vec<bool> = self
+            .chains
+            .iter()
+            .map(|c| !guide.taken.iter().any(|t| t.covers(&c.points)))
+            .collect();
+        let Some(first_free) = free.iter().position(|&f| f) else {
+            return Err(InitError::AllTaken {
+                candidates: self.chains.len(),
+            });
+        };
         let mut hint_missed = false;
         if let Some(h) = guide.hint {
             let near = self
                 .chains
                 .iter()
                 .enumerate()
+                .filter(|(k, _)| free[*k])
                 .map(|(k, c)| {
                     let d = c
                         .points
@@ -310,7 +364,7 @@ impl Found {
                 .filter(|&(_, d, reach)| d <= reach)
                 .min_by(|a, b| a.1.total_cmp(&b.1));
             match near {
-                Some((k, _, _)) => return (k, ChoiceRule::Clicked, false),
+                Some((k, _, _)) => return Ok((k, ChoiceRule::Clicked, false)),
                 None => hint_missed = true,
             }
         }
@@ -319,19 +373,19 @@ impl Found {
                 .chains
                 .iter()
                 .enumerate()
-                .filter(|(_, c)| c.length >= guide.min_length)
+                .filter(|(k, c)| free[*k] && c.length >= guide.min_length)
                 .map(|(k, c)| (k, mean_distance(guide.previous, &c.line)))
                 .min_by(|a, b| a.1.total_cmp(&b.1));
             if let Some((k, _)) = nearest {
-                return (k, ChoiceRule::NearestPrevious, hint_missed);
+                return Ok((k, ChoiceRule::NearestPrevious, hint_missed));
             }
         }
-        let rule = if self.chains.len() == 1 {
+        let rule = if free.iter().filter(|&&f| f).count() == 1 {
             ChoiceRule::Only
         } else {
             ChoiceRule::Longest
         };
-        (0, rule, hint_missed)
+        Ok((first_free, rule, hint_missed))
     }
 }
 
@@ -387,7 +441,7 @@ pub fn initialise(
     if found.chains.is_empty() {
         return Err(found.nothing(settings.min_blob_pixels));
     }
-    let (chosen, rule, hint_missed) = found.choose(guide);
+    let (chosen, rule, hint_missed) = found.choose(guide)?;
     let chain = &found.chains[chosen];
     let (mut path, mut zones, mut depths) = (
         chain.points.clone(),

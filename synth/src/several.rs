@@ -1,0 +1,492 @@
+//! Scenes of several ropes: two of one colour crossing, one dragged over
+//! the other or pulled out from under it, and three of different colours
+//! under a passing box. Each rope is simulated beside the others (they lie
+//! on each other, [`Rope::step_among`]) and has its own ground truth, with
+//! what hides it: a box, or another rope in front.
+
+use alloc::string::String;
+use alloc::vec::Vec;
+
+use upetrack::math::Vec3;
+use upetrack::rng::SplitMix64;
+use upetrack::{CameraIntrinsics, HsvRange};
+
+use crate::render::{
+    hidden_by_boxes, hidden_by_ropes, render_ropes, rope_hsv, CameraPose, OccluderBox,
+    RenderSettings, RopeLook,
+};
+use crate::rope::{Obstacle, Rope, RopeSettings};
+use crate::scenario::{BoxPath, MovingBox, Pull, SETTLING_FRAMES};
+use crate::MAX_FRAMES;
+
+/// The blue of the single-rope scenarios.
+const BLUE: [f64; 3] = [0.08, 0.22, 0.55];
+/// A red rope's albedo.
+const RED: [f64; 3] = [0.60, 0.10, 0.08];
+/// A green rope's albedo.
+const GREEN: [f64; 3] = [0.10, 0.42, 0.14];
+
+/// Length of each rope, metres (three fit side by side in view at 0.6 m).
+const ROPE_LENGTH: f64 = 0.42;
+/// Diameter of each rope, metres.
+const ROPE_THICKNESS: f64 = 0.010;
+
+/// Which scene of several ropes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SeveralKind {
+    /// Two ropes of one colour in an X; the upper one is dragged sideways
+    /// across the lower, so the crossing slides along it.
+    Crossing,
+    /// Two ropes of one colour in an X; the lower one is pulled out along
+    /// its own axis from under the upper.
+    FromUnder,
+    /// Three ropes (red, blue, green), the green lying across the other
+    /// two; a box passes over the middle while each is dragged at one end.
+    ThreeColours,
+}
+
+impl SeveralKind {
+    /// Every scene of several ropes.
+    pub const ALL: [Self; 3] = [Self::Crossing, Self::FromUnder, Self::ThreeColours];
+
+    /// Its command-line name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Crossing => "two-ropes-crossing",
+            Self::FromUnder => "rope-from-under",
+            Self::ThreeColours => "three-ropes",
+        }
+    }
+
+    /// The scene called `name`.
+    pub fn parse(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|k| k.name() == name)
+    }
+
+    /// One sentence on what it shows.
+    pub fn description(&self) -> &'static str {
+        match self {
+            Self::Crossing => "two blue ropes in an X; from 30 % of the frames on the upper one is dragged 14 cm sideways across the lower, the crossing sliding along it",
+            Self::FromUnder => "two blue ropes in an X; from 30 % of the frames on the lower one is pulled 16 cm along its own axis out from under the upper",
+            Self::ThreeColours => "a red, a blue and a green rope, the green lying across the other two; a box passes 8 cm over the middle while each is dragged 6 cm at one end",
+        }
+    }
+
+    /// Number of ropes.
+    pub fn rope_count(&self) -> usize {
+        match self {
+            Self::Crossing | Self::FromUnder => 2,
+            Self::ThreeColours => 3,
+        }
+    }
+}
+
+/// One rope's ground truth in a frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RopeTruth {
+    /// Centre line, ordered, metres, colour camera frame.
+    pub points: Vec<Vec3>,
+    /// For each point: hidden by a box or by another rope in front.
+    pub occluded: Vec<bool>,
+}
+
+/// One rendered frame of several ropes.
+#[derive(Debug, Clone)]
+pub struct SeveralFrame {
+    /// Frame index.
+    pub index: usize,
+    /// RGB8.
+    pub rgb: Vec<u8>,
+    /// Depth, millimetres.
+    pub depth: Vec<u16>,
+    /// Each rope's ground truth, in the scene's order.
+    pub ropes: Vec<RopeTruth>,
+    /// Where the camera was.
+    pub camera_pose: CameraPose,
+}
+
+/// A scene of several ropes being recorded.
+#[derive(Debug, Clone)]
+pub struct SeveralRopes {
+    /// Its command-line name (with `-without-<k>` when a rope was left out).
+    pub name: String,
+    /// Which scene.
+    pub kind: SeveralKind,
+    /// Frames to record.
+    pub frames: usize,
+    /// Rendering settings (the camera; the rope colours are the ropes').
+    pub render: RenderSettings,
+    /// The ropes simulated.
+    pub ropes: Vec<Rope>,
+    /// Each rope's albedo.
+    pub colors: Vec<[f64; 3]>,
+    /// Each rope's name (its colour, and a letter where two share one).
+    pub names: Vec<String>,
+    rng: SplitMix64,
+    next: usize,
+    /// Grasps: the rope, the grasp and its particle's settled position.
+    pulls: Vec<(usize, Pull, Vec3)>,
+    boxes: Vec<MovingBox>,
+}
+
+/// One rope of a scene before it is made: where it lies and how it looks.
+struct Laid {
+    shape: Vec<Vec3>,
+    color: [f64; 3],
+    name: &'static str,
+    /// Indices of the ropes (among those laid before it) it lies on.
+    over: &'static [usize],
+}
+
+impl SeveralRopes {
+    /// Sets up `kind` with `frames` frames (at least 1) and a seed; the
+    /// ropes are settled on the table and on each other first.
+    pub fn new(kind: SeveralKind, frames: usize, seed: u64) -> Self {
+        Self::build(kind, frames, seed, None)
+    }
+
+    /// The same scene with rope `removed` left out (simulated and drawn
+    /// without it): the single-rope figure a scene of several is judged
+    /// against. `None` when there is no such rope.
+    pub fn without(kind: SeveralKind, frames: usize, seed: u64, removed: usize) -> Option<Self> {
+        (removed < kind.rope_count()).then(|| Self::build(kind, frames, seed, Some(removed)))
+    }
+
+    fn build(kind: SeveralKind, frames: usize, seed: u64, removed: Option<usize>) -> Self {
+        let frames = frames.clamp(1, MAX_FRAMES);
+        let mut rng = SplitMix64::new(seed);
+        let at = |f: f64| ((frames as f64 * f) as usize).min(frames - 1);
+        // Small seeded variation of the layout: a shift of the whole scene.
+        let shift = Vec3::new(rng.range(-0.01, 0.01), rng.range(-0.01, 0.01), 0.0);
+        let line = |a: [f64; 2], b: [f64; 2], bow: f64| -> Vec<Vec3> {
+            (0..200)
+                .map(|i| {
+                    let t = i as f64 / 199.0;
+                    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+                    let len = libm::sqrt(dx * dx + dy * dy).max(1e-9);
+                    let off = bow * libm::sin(core::f64::consts::PI * t);
+                    Vec3::new(
+                        a[0] + dx * t - dy / len * off,
+                        a[1] + dy * t + dx / len * off,
+                        0.0,
+                    ) + shift
+                })
+                .collect()
+        };
+        let (laid, pulls, boxes): (
+            Vec<Laid>,
+            Vec<(usize, usize, Vec3, f64, f64)>,
+            Vec<MovingBox>,
+        ) = match kind {
+            SeveralKind::Crossing => (
+                alloc::vec![
+                    Laid {
+                        shape: line([-0.21, 0.0], [0.21, 0.02], 0.03),
+                        color: BLUE,
+                        name: "blue-a",
+                        over: &[]
+                    },
+                    Laid {
+                        shape: line([-0.07, -0.2], [-0.07, 0.2], -0.02),
+                        color: BLUE,
+                        name: "blue-b",
+                        over: &[0]
+                    },
+                ],
+                // Both ends of the upper rope, 14 cm along x.
+                alloc::vec![
+                    (1, 0, Vec3::new(0.14, 0.0, 0.0), 0.3, 0.85),
+                    (1, usize::MAX, Vec3::new(0.14, 0.0, 0.0), 0.3, 0.85),
+                ],
+                Vec::new(),
+            ),
+            SeveralKind::FromUnder => (
+                alloc::vec![
+                    Laid {
+                        shape: line([-0.15, 0.0], [0.24, 0.0], 0.03),
+                        color: BLUE,
+                        name: "blue-a",
+                        over: &[]
+                    },
+                    Laid {
+                        shape: line([0.08, -0.2], [0.08, 0.2], 0.02),
+                        color: BLUE,
+                        name: "blue-b",
+                        over: &[0]
+                    },
+                ],
+                // The lower rope's near end, 16 cm along its own axis.
+                alloc::vec![(0, 0, Vec3::new(-0.16, 0.0, 0.0), 0.3, 0.85)],
+                Vec::new(),
+            ),
+            SeveralKind::ThreeColours => (
+                alloc::vec![
+                    Laid {
+                        shape: line([-0.2, -0.09], [0.2, -0.07], 0.02),
+                        color: RED,
+                        name: "red",
+                        over: &[]
+                    },
+                    Laid {
+                        shape: line([-0.2, 0.04], [0.2, 0.05], -0.02),
+                        color: BLUE,
+                        name: "blue",
+                        over: &[]
+                    },
+                    Laid {
+                        shape: line([-0.12, -0.19], [0.1, 0.18], 0.02),
+                        color: GREEN,
+                        name: "green",
+                        over: &[0, 1]
+                    },
+                ],
+                alloc::vec![
+                    (0, usize::MAX, Vec3::new(0.0, -0.06, 0.0), 0.35, 0.85),
+                    (1, usize::MAX, Vec3::new(0.0, 0.06, 0.0), 0.35, 0.85),
+                    (2, usize::MAX, Vec3::new(0.06, 0.0, 0.0), 0.35, 0.85),
+                ],
+                alloc::vec![MovingBox {
+                    first: at(0.3),
+                    last: at(0.7),
+                    shape: OccluderBox {
+                        min: Vec3::new(-0.24, -0.04, 0.08) + shift,
+                        max: Vec3::new(-0.17, 0.04, 0.12) + shift,
+                        color: None,
+                    },
+                    path: BoxPath::Linear {
+                        travel: Vec3::new(0.36, 0.0, 0.0),
+                        bob: 0.0,
+                        dwell: true,
+                    },
+                }],
+            ),
+        };
+        let settings = RopeSettings {
+            length: ROPE_LENGTH,
+            thickness: ROPE_THICKNESS,
+            particles: 43,
+            ..RopeSettings::default()
+        };
+        let keep: Vec<usize> = (0..laid.len()).filter(|&k| Some(k) != removed).collect();
+        let mut ropes: Vec<Rope> = Vec::new();
+        for &k in &keep {
+            let mut rope = Rope::laid_along(&laid[k].shape, settings);
+            // Over the ropes it lies on: lifted onto them, then settled.
+            for &j in laid[k].over.iter().filter(|j| keep.contains(j)) {
+                let under = keep.iter().position(|&x| x == j).map(|i| &ropes[i]);
+                if let Some(under) = under {
+                    lift_over(&mut rope, under);
+                }
+            }
+            ropes.push(rope);
+        }
+        for _ in 0..SETTLING_FRAMES {
+            step_all(&mut ropes);
+        }
+        let pulls = pulls
+            .into_iter()
+            .filter_map(|(k, particle, offset, start, end)| {
+                let rope = keep.iter().position(|&x| x == k)?;
+                let particle = particle.min(ropes[rope].x.len() - 1);
+                let pull = Pull {
+                    particle,
+                    start: at(start),
+                    end: at(end),
+                    offset,
+                    circular: false,
+                };
+                Some((rope, pull, ropes[rope].x[particle]))
+            })
+            .collect();
+        let mut name = String::from(kind.name());
+        if let Some(k) = removed {
+            name.push_str(&alloc::format!("-without-{k}"));
+        }
+        Self {
+            name,
+            kind,
+            frames,
+            render: RenderSettings::default(),
+            colors: keep.iter().map(|&k| laid[k].color).collect(),
+            names: keep.iter().map(|&k| String::from(laid[k].name)).collect(),
+            ropes,
+            rng,
+            next: 0,
+            pulls,
+            boxes,
+        }
+    }
+
+    /// HSV thresholds that fit rope `k`'s colour.
+    pub fn hsv(&self, k: usize) -> HsvRange {
+        rope_hsv(self.colors.get(k).copied().unwrap_or(BLUE))
+    }
+
+    /// The camera.
+    pub fn camera(&self) -> CameraIntrinsics {
+        self.render.camera
+    }
+
+    /// Simulates and renders the next frame, or `None` after the last.
+    pub fn next_frame(&mut self) -> Option<SeveralFrame> {
+        if self.next >= self.frames {
+            return None;
+        }
+        let f = self.next;
+        self.next += 1;
+        if f > 0 {
+            for (rope, pull, origin) in &self.pulls {
+                if let Some(target) = pull.target(*origin, f) {
+                    self.ropes[*rope].grasp(pull.particle, target);
+                }
+            }
+            step_all(&mut self.ropes);
+        }
+        let boxes: Vec<OccluderBox> = self
+            .boxes
+            .iter()
+            .filter(|b| (b.first..=b.last).contains(&f))
+            .map(|b| b.at(f, &[], &[]))
+            .collect();
+        let looks: Vec<RopeLook<'_>> = self
+            .ropes
+            .iter()
+            .zip(&self.colors)
+            .map(|(r, c)| RopeLook {
+                particles: &r.x,
+                radius: r.radius(),
+                color: *c,
+                second_color: None,
+            })
+            .collect();
+        let rendered = render_ropes(&self.render, &looks, &boxes, &mut self.rng);
+        let pose = self.render.pose();
+        let ropes = self
+            .ropes
+            .iter()
+            .enumerate()
+            .map(|(k, rope)| {
+                let others: Vec<RopeLook<'_>> = looks
+                    .iter()
+                    .enumerate()
+                    .filter(|(j, _)| *j != k)
+                    .map(|(_, l)| *l)
+                    .collect();
+                RopeTruth {
+                    points: rope.x.iter().map(|p| pose.world_to_camera(p)).collect(),
+                    occluded: rope
+                        .x
+                        .iter()
+                        .map(|p| {
+                            hidden_by_boxes(&self.render, p, rope.radius(), &boxes)
+                                || hidden_by_ropes(&self.render, p, rope.radius(), &others)
+                        })
+                        .collect(),
+                }
+            })
+            .collect();
+        Some(SeveralFrame {
+            index: f,
+            rgb: rendered.rgb,
+            depth: rendered.depth,
+            ropes,
+            camera_pose: pose,
+        })
+    }
+
+    /// Frames not yet rendered.
+    pub fn remaining(&self) -> usize {
+        self.frames - self.next
+    }
+}
+
+/// One frame of physics for every rope, each beside the others as they
+/// stand (in order, so later ropes see the earlier ones' new positions).
+fn step_all(ropes: &mut [Rope]) {
+    for k in 0..ropes.len() {
+        let (before, rest) = ropes.split_at_mut(k);
+        let Some((rope, after)) = rest.split_first_mut() else {
+            continue;
+        };
+        let others: Vec<Obstacle<'_>> = before
+            .iter()
+            .chain(after.iter())
+            .map(|o| Obstacle {
+                particles: &o.x,
+                radius: o.radius(),
+            })
+            .collect();
+        rope.step_among(1.0 / 30.0, &others);
+    }
+}
+
+/// Raises the particles of `rope` that lie across `under` onto it, with a
+/// ramp of a few particles either side, so that settling lays it over.
+fn lift_over(rope: &mut Rope, under: &Rope) {
+    let reach = 2.0 * (rope.radius() + under.radius());
+    let top = 2.0 * under.radius() + rope.radius();
+    let near: Vec<f64> = rope
+        .x
+        .iter()
+        .map(|p| {
+            under
+                .x
+                .iter()
+                .map(|q| libm::hypot(p.x - q.x, p.y - q.y))
+                .fold(f64::INFINITY, f64::min)
+        })
+        .collect();
+    let (radius, half) = (rope.radius(), rope.settings.thickness / 2.0);
+    for (p, d) in rope.x.iter_mut().zip(near) {
+        // Full height within reach of the lower rope, falling off over
+        // three reaches.
+        let x = ((d - reach) / (3.0 * reach)).clamp(0.0, 1.0);
+        p.z = p.z.max(half + (top - radius) * (1.0 - x));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_upper_rope_lies_on_the_lower_and_each_has_its_ground_truth() {
+        let mut scene = SeveralRopes::new(SeveralKind::Crossing, 3, 1);
+        let frame = scene.next_frame().expect("a frame");
+        assert_eq!(frame.ropes.len(), 2);
+        // The upper rope rests on the lower: at the crossing it is about a
+        // diameter above the table's rope, nowhere inside it.
+        let (lower, upper) = (&scene.ropes[0], &scene.ropes[1]);
+        let highest = upper.x.iter().map(|p| p.z).fold(0.0, f64::max);
+        assert!(
+            (highest - (2.0 * lower.radius() + upper.radius())).abs() < 0.003,
+            "{highest}"
+        );
+        for p in &upper.x {
+            for q in &lower.x {
+                assert!((p - q).norm() > 0.9 * (lower.radius() + upper.radius()));
+            }
+        }
+        // Where it passes over, the lower rope is hidden from the camera.
+        assert!(frame.ropes[0].occluded.iter().any(|&o| o));
+        assert!(frame.ropes[1].occluded.iter().all(|&o| !o));
+    }
+
+    #[test]
+    fn a_scene_without_a_rope_keeps_the_others_and_is_deterministic() {
+        let mut a = SeveralRopes::without(SeveralKind::ThreeColours, 2, 5, 1).expect("rope 1");
+        let mut b = SeveralRopes::without(SeveralKind::ThreeColours, 2, 5, 1).expect("rope 1");
+        assert_eq!(a.names, ["red", "green"]);
+        let (fa, fb) = (
+            a.next_frame().expect("frame"),
+            b.next_frame().expect("frame"),
+        );
+        assert_eq!(fa.rgb, fb.rgb);
+        assert_eq!(fa.depth, fb.depth);
+        assert!(SeveralRopes::without(SeveralKind::ThreeColours, 2, 5, 3).is_none());
+        assert_eq!(
+            SeveralKind::parse("rope-from-under"),
+            Some(SeveralKind::FromUnder)
+        );
+    }
+}
