@@ -350,8 +350,12 @@ pub struct SynthArgs {
     pub y4m: Option<PathBuf>,
     /// With a scene of several ropes: leave rope K (from 0) out, simulated
     /// and drawn without it (the single-rope figure to compare with).
-    #[arg(long, value_name = "K")]
+    #[arg(long, value_name = "K", conflicts_with = "only")]
     pub without: Option<usize>,
+    /// With a scene of several ropes: rope K (from 0) alone, simulated and
+    /// drawn without the others.
+    #[arg(long, value_name = "K")]
+    pub only: Option<usize>,
 }
 
 /// `synth`'s examples.
@@ -435,7 +439,7 @@ pub fn scenario_list() -> String {
         "random",
         "a whole scene drawn from the seed (docs/synthetic.md)",
     );
-    s += "\nScenes of several ropes (dlo.json lists them; --without K leaves rope K out):\n";
+    s += "\nScenes of several ropes (dlo.json lists them; --without K leaves rope K out, --only K keeps it alone):\n";
     for k in SeveralKind::ALL {
         s += &list_entry(k.name(), k.description());
     }

@@ -60,9 +60,9 @@ pub fn cmd_synth(args: &SynthArgs) -> Result<(), CliError> {
         SynthScenario::Several(kind) => return synth_several(kind, args),
         SynthScenario::Described(kind) => kind,
     };
-    if args.without.is_some() {
+    if args.without.is_some() || args.only.is_some() {
         return Err(CliError::usage(
-            "--without is for scenes of several ropes (`upetrack scenarios` lists them)",
+            "--without and --only are for scenes of several ropes (`upetrack scenarios` lists them)",
         ));
     }
     if args.count.is_some() {
@@ -114,15 +114,20 @@ fn synth_several(kind: SeveralKind, args: &SynthArgs) -> Result<(), CliError> {
         )));
     }
     let frames = args.frames.map_or(DEFAULT_FRAMES, |n| n as usize);
-    let scene = match args.without {
-        None => SeveralRopes::new(kind, frames, args.seed),
-        Some(k) => SeveralRopes::without(kind, frames, args.seed, k).ok_or_else(|| {
-            CliError::usage(format!(
-                "--without {k}: {} has ropes 0 to {}",
-                kind.name(),
-                kind.rope_count() - 1
-            ))
-        })?,
+    let no_such = |option: &str, k: usize| {
+        CliError::usage(format!(
+            "--{option} {k}: {} has ropes 0 to {}",
+            kind.name(),
+            kind.rope_count() - 1
+        ))
+    };
+    let scene = match (args.without, args.only) {
+        (Some(k), _) => SeveralRopes::without(kind, frames, args.seed, k)
+            .ok_or_else(|| no_such("without", k))?,
+        (None, Some(k)) => {
+            SeveralRopes::only(kind, frames, args.seed, k).ok_or_else(|| no_such("only", k))?
+        }
+        (None, None) => SeveralRopes::new(kind, frames, args.seed),
     };
     let start = Instant::now();
     let bar = progress::bar(frames as u64, "frames", kind.name());

@@ -103,9 +103,9 @@ pub fn track_result(params: Params, mut frames: Vec<FrameRecord>) -> TrackResult
 }
 
 /// Several ropes' records of one frame, timed as one: `total_ms` from the
-/// decoded images to every rope's step, `track_ms` everything after
-/// segmentation (sharing the pixels, the clouds and every rope's step),
-/// the same on each rope's record.
+/// decoded images to every rope's step, `track_ms` every rope's step from
+/// the shared pixels' clouds (with the initialisation of ropes not
+/// tracked), the same on each rope's record.
 pub fn track_frame_several(
     ropes: &mut MultiTracker,
     index: usize,
@@ -115,8 +115,9 @@ pub fn track_frame_several(
 ) -> Result<Vec<FrameRecord>, upetrack::tracker::TrackerError> {
     let t0 = now_ms();
     let masks = ropes.segment(frame, occlusions)?;
+    let observations = ropes.observe(frame, &masks, occlusions);
     let t1 = now_ms();
-    let outputs = ropes.update(frame, &masks, occlusions);
+    let outputs = ropes.step(frame, &masks, observations, occlusions);
     let t2 = now_ms();
     Ok(outputs
         .iter()

@@ -67,7 +67,7 @@ impl SeveralKind {
     pub fn description(&self) -> &'static str {
         match self {
             Self::Crossing => "two blue ropes in an X; from 30 % of the frames on the upper one is dragged 14 cm sideways across the lower, the crossing sliding along it",
-            Self::FromUnder => "two blue ropes in an X; from 30 % of the frames on the lower one is pulled 16 cm along its own axis out from under the upper",
+            Self::FromUnder => "two blue ropes in an X; from 30 % of the frames on the lower one is pulled 14 cm along its own axis, its far end passing out from under the upper",
             Self::ThreeColours => "a red, a blue and a green rope, the green lying across the other two; a box passes 8 cm over the middle while each is dragged 6 cm at one end",
         }
     }
@@ -129,6 +129,15 @@ pub struct SeveralRopes {
     boxes: Vec<MovingBox>,
 }
 
+/// Which of a scene's ropes are made.
+#[derive(Debug, Clone, Copy)]
+enum Keep {
+    /// All but this one.
+    AllBut(usize),
+    /// This one alone.
+    Only(usize),
+}
+
 /// One rope of a scene before it is made: where it lies and how it looks.
 struct Laid {
     shape: Vec<Vec3>,
@@ -149,10 +158,17 @@ impl SeveralRopes {
     /// without it): the single-rope figure a scene of several is judged
     /// against. `None` when there is no such rope.
     pub fn without(kind: SeveralKind, frames: usize, seed: u64, removed: usize) -> Option<Self> {
-        (removed < kind.rope_count()).then(|| Self::build(kind, frames, seed, Some(removed)))
+        (removed < kind.rope_count())
+            .then(|| Self::build(kind, frames, seed, Some(Keep::AllBut(removed))))
     }
 
-    fn build(kind: SeveralKind, frames: usize, seed: u64, removed: Option<usize>) -> Self {
+    /// The same scene with rope `kept` alone (simulated and drawn without
+    /// the others). `None` when there is no such rope.
+    pub fn only(kind: SeveralKind, frames: usize, seed: u64, kept: usize) -> Option<Self> {
+        (kept < kind.rope_count()).then(|| Self::build(kind, frames, seed, Some(Keep::Only(kept))))
+    }
+
+    fn build(kind: SeveralKind, frames: usize, seed: u64, chosen: Option<Keep>) -> Self {
         let frames = frames.clamp(1, MAX_FRAMES);
         let mut rng = SplitMix64::new(seed);
         let at = |f: f64| ((frames as f64 * f) as usize).min(frames - 1);
@@ -203,20 +219,21 @@ impl SeveralRopes {
             SeveralKind::FromUnder => (
                 alloc::vec![
                     Laid {
-                        shape: line([-0.15, 0.0], [0.24, 0.0], 0.03),
+                        shape: line([-0.11, 0.0], [0.26, 0.0], 0.03),
                         color: BLUE,
                         name: "blue-a",
                         over: &[]
                     },
                     Laid {
-                        shape: line([0.08, -0.2], [0.08, 0.2], 0.02),
+                        shape: line([0.14, -0.2], [0.14, 0.2], 0.02),
                         color: BLUE,
                         name: "blue-b",
                         over: &[0]
                     },
                 ],
-                // The lower rope's near end, 16 cm along its own axis.
-                alloc::vec![(0, 0, Vec3::new(-0.16, 0.0, 0.0), 0.3, 0.85)],
+                // The lower rope's near end, 14 cm along its own axis: its
+                // far end passes under the upper rope and out.
+                alloc::vec![(0, 0, Vec3::new(-0.14, 0.0, 0.0), 0.3, 0.85)],
                 Vec::new(),
             ),
             SeveralKind::ThreeColours => (
@@ -267,7 +284,13 @@ impl SeveralRopes {
             particles: 43,
             ..RopeSettings::default()
         };
-        let keep: Vec<usize> = (0..laid.len()).filter(|&k| Some(k) != removed).collect();
+        let keep: Vec<usize> = (0..laid.len())
+            .filter(|&k| match chosen {
+                None => true,
+                Some(Keep::AllBut(r)) => k != r,
+                Some(Keep::Only(o)) => k == o,
+            })
+            .collect();
         let mut ropes: Vec<Rope> = Vec::new();
         for &k in &keep {
             let mut rope = Rope::laid_along(&laid[k].shape, settings);
@@ -299,8 +322,10 @@ impl SeveralRopes {
             })
             .collect();
         let mut name = String::from(kind.name());
-        if let Some(k) = removed {
-            name.push_str(&alloc::format!("-without-{k}"));
+        match chosen {
+            None => {}
+            Some(Keep::AllBut(k)) => name.push_str(&alloc::format!("-without-{k}")),
+            Some(Keep::Only(k)) => name.push_str(&alloc::format!("-only-{k}")),
         }
         Self {
             name,

@@ -17,6 +17,9 @@ use super::frame::Frame;
 use super::segmentation::Mask;
 use crate::math::{nearest_on_segment, Vec2, Vec3};
 
+/// Most ropes whose pixels are shared (one bit each per pixel).
+pub const MAX_SHARED: usize = 8;
+
 /// A tracked rope as the sharing sees it.
 #[derive(Debug, Clone, Copy)]
 pub struct RopeLine<'a> {
@@ -36,11 +39,9 @@ pub struct PixelShare {
     pub others: Mask,
 }
 
-/// Who a pixel belongs to.
+/// Who a pixel of some rope's colour belongs to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Owner {
-    /// No rope's colour.
-    Nobody,
     /// Rope `k`'s alone.
     Rope(usize),
     /// Every rope whose colour it has.
@@ -51,7 +52,8 @@ enum Owner {
 /// colour mask, `lines[k]` its tracked state (`None` while not tracked)
 /// and `reach` (metres) how far from a tracked rope's surface a pixel's
 /// point may lie and still be that rope's. All masks must have the
-/// frame's size (a mask of another size is taken as empty).
+/// frame's size (a mask of another size is taken as empty, as is any
+/// past the [`MAX_SHARED`]th).
 pub fn share_pixels(
     frame: &Frame<'_>,
     camera: &CameraIntrinsics,
@@ -61,77 +63,181 @@ pub fn share_pixels(
 ) -> Vec<PixelShare> {
     let (w, h) = (frame.width, frame.height);
     let n = w as usize * h as usize;
-    let usable: Vec<bool> = masks.iter().map(|m| m.data.len() == n).collect();
-    let windows: Vec<Option<Window>> = lines
+    let usable: Vec<bool> = masks
         .iter()
-        .map(|l| l.and_then(|l| Window::of(&l, camera, reach)))
+        .enumerate()
+        .map(|(k, m)| k < MAX_SHARED && m.data.len() == n)
         .collect();
-    let mut owners = vec![Owner::Nobody; n];
-    let mut accepting = Vec::with_capacity(masks.len());
-    for (i, owner) in owners.iter_mut().enumerate() {
-        accepting.clear();
-        accepting.extend((0..masks.len()).filter(|&k| usable[k] && masks[k].data[i]));
-        *owner = match accepting.len() {
-            0 => Owner::Nobody,
-            1 if lines.iter().all(Option::is_none) => Owner::Rope(accepting[0]),
-            _ => {
-                let (u, v) = ((i % w as usize) as f64, (i / w as usize) as f64);
-                let raw = frame.depth[i];
-                let point =
-                    (raw != 0).then(|| camera.deproject(u, v, raw as f64 * frame.depth_scale));
-                let nearest = accepting
-                    .iter()
-                    .filter_map(|&k| {
-                        let line = lines.get(k).copied().flatten()?;
-                        let window = windows.get(k).copied().flatten()?;
-                        window.contains(u, v).then_some(())?;
-                        let d = match point {
-                            Some(p) => surface_distance(&p, &line),
-                            None => window.distance_in_image(Vec2::new(u, v), &line, camera),
-                        };
-                        Some((k, d))
-                    })
-                    .min_by(|a, b| a.1.total_cmp(&b.1));
-                match nearest {
-                    Some((k, d)) if d <= reach => Owner::Rope(k),
-                    _ if accepting.len() == 1 => Owner::Rope(accepting[0]),
-                    _ => Owner::Shared,
-                }
-            }
-        };
-    }
-    (0..masks.len())
+    let windows: Vec<Option<Window>> = (0..masks.len())
         .map(|k| {
-            let mut own = Mask::new(w, h);
-            let mut others = Mask::new(w, h);
-            for (i, owner) in owners.iter().enumerate() {
-                match *owner {
-                    Owner::Rope(j) if j == k => own.data[i] = true,
-                    Owner::Rope(_) => others.data[i] = true,
-                    Owner::Shared => own.data[i] = usable[k] && masks[k].data[i],
-                    Owner::Nobody => {}
-                }
-            }
-            PixelShare { own, others }
+            let line = lines.get(k).copied().flatten()?;
+            Window::of(&line, camera, reach)
         })
-        .collect()
+        .collect();
+    let axes: Vec<Option<Axis>> = (0..masks.len())
+        .map(|k| lines.get(k).copied().flatten().map(|l| Axis::of(&l)))
+        .collect();
+    // Each rope's segment nearest the last pixel looked at.
+    let mut starts = vec![0usize; masks.len()];
+    // Which ropes' colours each pixel has, one bit per rope.
+    let mut colours = vec![0u8; n];
+    for (k, mask) in masks.iter().enumerate().filter(|(k, _)| usable[*k]) {
+        for (c, &on) in colours.iter_mut().zip(&mask.data) {
+            *c |= u8::from(on) << k;
+        }
+    }
+    let mut shares: Vec<PixelShare> = masks
+        .iter()
+        .map(|_| PixelShare {
+            own: Mask::new(w, h),
+            others: Mask::new(w, h),
+        })
+        .collect();
+    for (i, &bits) in colours.iter().enumerate().filter(|(_, b)| **b != 0) {
+        let owner = if bits.is_power_of_two() {
+            // One colour: that rope's, whatever lies near.
+            Owner::Rope(bits.trailing_zeros() as usize)
+        } else {
+            let (u, v) = ((i % w as usize) as f64, (i / w as usize) as f64);
+            owner_among(
+                bits,
+                u,
+                v,
+                frame.depth[i],
+                frame,
+                camera,
+                (lines, &axes, &mut starts),
+                &windows,
+                reach,
+            )
+        };
+        for (k, share) in shares.iter_mut().enumerate() {
+            match owner {
+                Owner::Rope(j) if j == k => share.own.data[i] = true,
+                Owner::Rope(_) => share.others.data[i] = true,
+                Owner::Shared => share.own.data[i] = bits & (1 << k) != 0,
+            }
+        }
+    }
+    shares
+}
+
+/// The owner of a pixel `(u, v)` (raw depth `raw`) that the colours of the
+/// ropes in `bits` accept.
+#[allow(clippy::too_many_arguments)]
+fn owner_among(
+    bits: u8,
+    u: f64,
+    v: f64,
+    raw: u16,
+    frame: &Frame<'_>,
+    camera: &CameraIntrinsics,
+    (lines, axes, starts): (&[Option<RopeLine<'_>>], &[Option<Axis>], &mut [usize]),
+    windows: &[Option<Window>],
+    reach: f64,
+) -> Owner {
+    let near = |k: usize| bits & (1 << k) != 0 && windows[k].is_some_and(|win| win.contains(u, v));
+    let mut tracked = (0..windows.len()).filter(|&k| near(k));
+    let (Some(first), second) = (tracked.next(), tracked.next()) else {
+        // Within reach of no tracked rope of its colour: everyone's.
+        return Owner::Shared;
+    };
+    if second.is_none() {
+        // Of one tracked rope only: no other is near enough to want it.
+        return Owner::Rope(first);
+    }
+    let point = (raw != 0).then(|| camera.deproject(u, v, raw as f64 * frame.depth_scale));
+    let nearest = (0..windows.len())
+        .filter(|&k| near(k))
+        .filter_map(|k| {
+            let line = lines.get(k).copied().flatten()?;
+            let d = match (point, windows[k]) {
+                (Some(p), _) => axes[k].as_ref()?.surface_distance_from(&p, &mut starts[k]),
+                (None, Some(win)) => win.distance_in_image(Vec2::new(u, v), &line, camera),
+                (None, None) => return None,
+            };
+            Some((k, d))
+        })
+        .min_by(|a, b| a.1.total_cmp(&b.1));
+    match nearest {
+        Some((k, d)) if d <= reach => Owner::Rope(k),
+        _ => Owner::Shared,
+    }
 }
 
 /// Distance from `p` to the surface of `line` (its axis less its radius),
 /// metres; infinite for a line without nodes.
+#[cfg(test)]
 fn surface_distance(p: &Vec3, line: &RopeLine<'_>) -> f64 {
-    let axis = match line.nodes {
-        [] => return f64::INFINITY,
-        [only] => (p - only).norm(),
-        nodes => nodes
-            .windows(2)
-            .map(|s| {
-                let t = nearest_on_segment(p, &s[0], &s[1]);
-                (p - (s[0] + (s[1] - s[0]) * t)).norm()
-            })
-            .fold(f64::INFINITY, f64::min),
-    };
-    axis - line.radius
+    Axis::of(line).surface_distance_from(p, &mut 0)
+}
+
+/// A tracked rope's axis, its segments measured once for every pixel.
+#[derive(Debug, Clone)]
+struct Axis {
+    /// Each segment's start, direction (end less start), middle and half
+    /// length.
+    segments: Vec<(Vec3, Vec3, Vec3, f64)>,
+    /// A rope of one node: where it is.
+    single: Option<Vec3>,
+    radius: f64,
+}
+
+impl Axis {
+    fn of(line: &RopeLine<'_>) -> Self {
+        Self {
+            segments: line
+                .nodes
+                .windows(2)
+                .map(|s| {
+                    (
+                        s[0],
+                        s[1] - s[0],
+                        (s[0] + s[1]) * 0.5,
+                        0.5 * (s[1] - s[0]).norm(),
+                    )
+                })
+                .collect(),
+            single: match line.nodes {
+                [only] => Some(*only),
+                _ => None,
+            },
+            radius: line.radius,
+        }
+    }
+
+    /// Distance from `p` to the rope's surface (its axis less its
+    /// radius), metres, infinite for a rope without nodes; looking first
+    /// at segment `*start` (the nearest to the last pixel, most often the
+    /// nearest to this one) and leaving the nearest there.
+    fn surface_distance_from(&self, p: &Vec3, start: &mut usize) -> f64 {
+        if let Some(only) = self.single {
+            return (p - only).norm() - self.radius;
+        }
+        let n = self.segments.len();
+        let (mut best, mut best2, mut nearest) = (f64::INFINITY, f64::INFINITY, *start);
+        for j in (0..n).map(|j| (j + *start) % n) {
+            let (a, ab, mid, half) = &self.segments[j];
+            // No point of a segment is nearer than its middle less half its
+            // length: most segments are passed over at that.
+            let reach = best + half;
+            if (p - mid).norm_squared() > reach * reach {
+                continue;
+            }
+            let len2 = ab.norm_squared();
+            let t = if len2 > 0.0 {
+                ((p - a).dot(ab) / len2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let d2 = (p - (a + ab * t)).norm_squared();
+            if d2 < best2 {
+                (best2, best, nearest) = (d2, libm::sqrt(d2), j);
+            }
+        }
+        *start = nearest;
+        best - self.radius
+    }
 }
 
 /// The pixels within reach of a tracked rope: its projected nodes' box,

@@ -9,11 +9,11 @@ use crate::math::Vec2;
 use crate::perception::frame::Frame;
 use crate::perception::initialisation::TakenRope;
 use crate::perception::segmentation::{Mask, Rect};
-use crate::perception::sharing::{share_pixels, PixelShare, RopeLine};
+use crate::perception::sharing::{share_pixels, PixelShare, RopeLine, MAX_SHARED};
 
-/// Most ropes one [`MultiTracker`] follows: the sharing of pixels costs
-/// each pixel a look at every rope's nodes.
-pub const MAX_ROPES: usize = 8;
+/// Most ropes one [`MultiTracker`] follows: as many as pixels are shared
+/// between ([`MAX_SHARED`]).
+pub const MAX_ROPES: usize = MAX_SHARED;
 
 /// Tracks up to [`MAX_ROPES`] ropes seen by one camera.
 ///
@@ -62,55 +62,81 @@ impl MultiTracker {
 
     /// Tracks every rope on `frame` (with `occlusions` blacked out): one
     /// output per rope, in order. Fails only on a frame that does not fit
-    /// the camera. [`MultiTracker::segment`] then [`MultiTracker::update`].
+    /// the camera. [`MultiTracker::segment`], [`MultiTracker::observe`],
+    /// then [`MultiTracker::step`].
     pub fn process(
         &mut self,
         frame: &Frame<'_>,
         occlusions: &[Rect],
     ) -> Result<Vec<FrameOutput>, TrackerError> {
         let masks = self.segment(frame, occlusions)?;
-        Ok(self.update(frame, &masks, occlusions))
+        let observations = self.observe(frame, &masks, occlusions);
+        Ok(self.step(frame, &masks, observations, occlusions))
     }
 
-    /// The tracking of every rope on `frame`, from
-    /// [`MultiTracker::segment`]'s masks of it (a rope without one sees
-    /// nothing of its colour).
-    pub fn update(
-        &mut self,
+    /// The observations of the ropes tracked now, from
+    /// [`MultiTracker::segment`]'s masks of `frame`: each one's share of
+    /// the pixels and its cloud (`None` for a rope not tracked; with one
+    /// rope, its whole mask).
+    pub fn observe(
+        &self,
         frame: &Frame<'_>,
         masks: &[Mask],
         occlusions: &[Rect],
-    ) -> Vec<FrameOutput> {
+    ) -> Vec<Option<Observation>> {
         let empty = Mask::new(frame.width, frame.height);
-        let masks: Vec<&Mask> = (0..self.ropes.len())
-            .map(|k| masks.get(k).unwrap_or(&empty))
-            .collect();
-        if let ([only], [mask]) = (self.ropes.as_mut_slice(), masks.as_slice()) {
+        let masks = padded(masks, self.ropes.len(), &empty);
+        if let ([only], [mask]) = (self.ropes.as_slice(), masks.as_slice()) {
             // One rope: exactly `Tracker::process`.
             let cloud = only.cloud(frame, mask);
-            let obs = Observation::new((*mask).clone(), cloud, occlusions);
-            return alloc::vec![only.update(frame, &obs)];
+            return alloc::vec![Some(Observation::new((*mask).clone(), cloud, occlusions))];
         }
-        let mut outputs: Vec<Option<FrameOutput>> = self.ropes.iter().map(|_| None).collect();
-        // Tracked ropes step on the shares of their last states...
-        let tracked: Vec<usize> = (0..self.ropes.len())
-            .filter(|&k| self.ropes[k].is_tracking())
+        if !self.ropes.iter().any(Tracker::is_tracking) {
+            return self.ropes.iter().map(|_| None).collect();
+        }
+        self.share(frame, &masks)
+            .into_iter()
+            .enumerate()
+            .map(|(k, share)| {
+                self.ropes[k]
+                    .is_tracking()
+                    .then(|| self.observation(k, frame, share, masks[k], occlusions))
+            })
+            .collect()
+    }
+
+    /// The tracking of every rope: each with an observation (from
+    /// [`MultiTracker::observe`]) steps on it; then each without one is
+    /// looked for, in order, in what the ropes tracked by then leave.
+    pub fn step(
+        &mut self,
+        frame: &Frame<'_>,
+        masks: &[Mask],
+        observations: Vec<Option<Observation>>,
+        occlusions: &[Rect],
+    ) -> Vec<FrameOutput> {
+        let empty = Mask::new(frame.width, frame.height);
+        let masks = padded(masks, self.ropes.len(), &empty);
+        let mut observations = observations.into_iter();
+        let mut outputs: Vec<Option<FrameOutput>> = self
+            .ropes
+            .iter_mut()
+            .map(|rope| {
+                let obs = observations.next().flatten()?;
+                Some(rope.update(frame, &obs))
+            })
             .collect();
-        if !tracked.is_empty() {
-            let shares = self.share(frame, &masks);
-            for &k in &tracked {
-                let obs = self.observation(k, frame, &shares[k], masks[k], occlusions);
-                outputs[k] = Some(self.ropes[k].update(frame, &obs));
-            }
-        }
-        // ...then each rope not tracked is looked for, in order, in what
-        // the ropes tracked by then leave.
         for k in 0..self.ropes.len() {
             if outputs[k].is_some() {
                 continue;
             }
-            let shares = self.share(frame, &masks);
-            let obs = self.observation(k, frame, &shares[k], masks[k], occlusions);
+            let obs = if self.ropes.len() == 1 {
+                let cloud = self.ropes[k].cloud(frame, masks[k]);
+                Observation::new(masks[k].clone(), cloud, occlusions)
+            } else {
+                let share = self.share(frame, &masks).swap_remove(k);
+                self.observation(k, frame, share, masks[k], occlusions)
+            };
             outputs[k] = Some(self.ropes[k].update(frame, &obs));
         }
         outputs.into_iter().flatten().collect()
@@ -160,13 +186,13 @@ impl MultiTracker {
         &self,
         k: usize,
         frame: &Frame<'_>,
-        share: &PixelShare,
+        share: PixelShare,
         colour: &Mask,
         occlusions: &[Rect],
     ) -> Observation {
         let rope = &self.ropes[k];
         let cloud = rope.cloud(frame, &share.own);
-        let mut obs = Observation::new(share.own.clone(), cloud, occlusions);
+        let mut obs = Observation::new(share.own, cloud, occlusions);
         let camera = rope.camera();
         let focal = camera.fx.max(camera.fy);
         let taken = self
@@ -189,10 +215,15 @@ impl MultiTracker {
             })
             .collect();
         obs.others = Some(OtherRopes {
-            pixels: share.others.clone(),
+            pixels: share.others,
             colour: colour.clone(),
             taken,
         });
         obs
     }
+}
+
+/// `masks` as `count` references, a rope without one given `empty`.
+fn padded<'a>(masks: &'a [Mask], count: usize, empty: &'a Mask) -> Vec<&'a Mask> {
+    (0..count).map(|k| masks.get(k).unwrap_or(empty)).collect()
 }
