@@ -9,7 +9,7 @@ use upetrack::tracker::MAX_ROPES;
 use upetrack::HsvRange;
 
 use crate::error::SequenceError;
-use crate::sequence::{read_groundtruth, DloConfig, RopeConfig, SegmentationConfig};
+use crate::sequence::{read_groundtruth, DloConfig, RopeConfig, SegmentationConfig, Truth};
 use crate::source::{is_inside_name, Source};
 
 /// Longest rope name, bytes.
@@ -126,18 +126,17 @@ pub(crate) fn sequence_ropes<S: Source>(
     config: &DloConfig,
     hsv: HsvRange,
     frames: usize,
-    known: impl Fn(usize) -> Option<(Vec<Option<Vec<Vec3>>>, Vec<bool>)>,
+    known: impl Fn(usize) -> Option<Truth>,
 ) -> Result<Vec<SequenceRope>, SequenceError> {
     let shared_prior = config.rope.map(|r| r.prior()).unwrap_or_default();
     if config.ropes.is_empty() {
-        let (groundtruth, groundtruth_occluded) =
-            known(0).unwrap_or_else(|| (vec![None; frames], vec![false; frames]));
+        let truth = known(0).unwrap_or_else(|| Truth::none(frames));
         return Ok(vec![SequenceRope {
             name: rope_name(config, 0),
             hsv,
             prior: shared_prior,
-            groundtruth,
-            groundtruth_occluded,
+            groundtruth: truth.points,
+            groundtruth_occluded: truth.occluded,
         }]);
     }
     config
@@ -145,10 +144,10 @@ pub(crate) fn sequence_ropes<S: Source>(
         .iter()
         .enumerate()
         .map(|(k, rope)| {
-            let (groundtruth, groundtruth_occluded) = match (&rope.groundtruth, known(k)) {
+            let truth = match (&rope.groundtruth, known(k)) {
                 (Some(name), _) => read_groundtruth(source, name, true, frames)?,
                 (None, Some(read)) => read,
-                (None, None) => (vec![None; frames], vec![false; frames]),
+                (None, None) => Truth::none(frames),
             };
             Ok(SequenceRope {
                 name: rope_name(config, k),
@@ -157,8 +156,8 @@ pub(crate) fn sequence_ropes<S: Source>(
                     .as_ref()
                     .map_or(hsv, SegmentationConfig::range),
                 prior: rope.rope.map_or(shared_prior, |r| r.prior()),
-                groundtruth,
-                groundtruth_occluded,
+                groundtruth: truth.points,
+                groundtruth_occluded: truth.occluded,
             })
         })
         .collect()

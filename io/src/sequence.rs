@@ -270,7 +270,7 @@ pub(crate) fn read_groundtruth<S: Source>(
     name: &str,
     named: bool,
     frames: usize,
-) -> Result<(Vec<Option<Vec<Vec3>>>, Vec<bool>), SequenceError> {
+) -> Result<Truth, SequenceError> {
     let mut groundtruth = vec![None; frames];
     let mut groundtruth_occluded = vec![false; frames];
     if source.is_file(name) {
@@ -309,7 +309,28 @@ pub(crate) fn read_groundtruth<S: Source>(
             what: "ground truth named in dlo.json",
         });
     }
-    Ok((groundtruth, groundtruth_occluded))
+    Ok(Truth {
+        points: groundtruth,
+        occluded: groundtruth_occluded,
+    })
+}
+
+/// One rope's ground truth as read: per frame index its points (when
+/// given) and whether part of it is hidden.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub(crate) struct Truth {
+    pub(crate) points: Vec<Option<Vec<Vec3>>>,
+    pub(crate) occluded: Vec<bool>,
+}
+
+impl Truth {
+    /// No ground truth for `frames` frames.
+    pub(crate) fn none(frames: usize) -> Self {
+        Self {
+            points: vec![None; frames],
+            occluded: vec![false; frames],
+        }
+    }
 }
 
 /// A decoded colour/depth pair.
@@ -634,16 +655,15 @@ impl<S: Source> Sequence<S> {
             .clone()
             .unwrap_or_else(|| "groundtruth.json".to_string());
         let frames = color_files.len();
-        let (groundtruth, groundtruth_occluded) =
-            read_groundtruth(&source, &gt_name, config.groundtruth.is_some(), frames)?;
+        let truth = read_groundtruth(&source, &gt_name, config.groundtruth.is_some(), frames)?;
         let ropes = crate::ropes::sequence_ropes(&source, &config, hsv, frames, |k| {
-            (k == 0).then(|| (groundtruth.clone(), groundtruth_occluded.clone()))
+            (k == 0).then(|| truth.clone())
         })?;
         // The first rope's are the sequence's (readers of one rope).
         let hsv = ropes.first().map_or(hsv, |r| r.hsv);
         let (groundtruth, groundtruth_occluded) = match ropes.first() {
             Some(r) => (r.groundtruth.clone(), r.groundtruth_occluded.clone()),
-            None => (groundtruth, groundtruth_occluded),
+            None => (truth.points, truth.occluded),
         };
         Ok(Self {
             source,

@@ -129,6 +129,17 @@ pub struct SeveralRopes {
     boxes: Vec<MovingBox>,
 }
 
+/// A grasp of a scene being made: rope `rope`'s particle `particle`
+/// (clamped to its last) moved by `offset` from `start` to `end` (shares
+/// of the frames).
+struct Grasp {
+    rope: usize,
+    particle: usize,
+    offset: Vec3,
+    start: f64,
+    end: f64,
+}
+
 /// Which of a scene's ropes are made.
 #[derive(Debug, Clone, Copy)]
 enum Keep {
@@ -189,11 +200,7 @@ impl SeveralRopes {
                 })
                 .collect()
         };
-        let (laid, pulls, boxes): (
-            Vec<Laid>,
-            Vec<(usize, usize, Vec3, f64, f64)>,
-            Vec<MovingBox>,
-        ) = match kind {
+        let (laid, pulls, boxes): (Vec<Laid>, Vec<Grasp>, Vec<MovingBox>) = match kind {
             SeveralKind::Crossing => (
                 alloc::vec![
                     Laid {
@@ -211,8 +218,20 @@ impl SeveralRopes {
                 ],
                 // Both ends of the upper rope, 14 cm along x.
                 alloc::vec![
-                    (1, 0, Vec3::new(0.14, 0.0, 0.0), 0.3, 0.85),
-                    (1, usize::MAX, Vec3::new(0.14, 0.0, 0.0), 0.3, 0.85),
+                    Grasp {
+                        rope: 1,
+                        particle: 0,
+                        offset: Vec3::new(0.14, 0.0, 0.0),
+                        start: 0.3,
+                        end: 0.85
+                    },
+                    Grasp {
+                        rope: 1,
+                        particle: usize::MAX,
+                        offset: Vec3::new(0.14, 0.0, 0.0),
+                        start: 0.3,
+                        end: 0.85
+                    },
                 ],
                 Vec::new(),
             ),
@@ -233,7 +252,13 @@ impl SeveralRopes {
                 ],
                 // The lower rope's near end, 14 cm along its own axis: its
                 // far end passes under the upper rope and out.
-                alloc::vec![(0, 0, Vec3::new(-0.14, 0.0, 0.0), 0.3, 0.85)],
+                alloc::vec![Grasp {
+                    rope: 0,
+                    particle: 0,
+                    offset: Vec3::new(-0.14, 0.0, 0.0),
+                    start: 0.3,
+                    end: 0.85
+                }],
                 Vec::new(),
             ),
             SeveralKind::ThreeColours => (
@@ -258,9 +283,27 @@ impl SeveralRopes {
                     },
                 ],
                 alloc::vec![
-                    (0, usize::MAX, Vec3::new(0.0, -0.06, 0.0), 0.35, 0.85),
-                    (1, usize::MAX, Vec3::new(0.0, 0.06, 0.0), 0.35, 0.85),
-                    (2, usize::MAX, Vec3::new(0.06, 0.0, 0.0), 0.35, 0.85),
+                    Grasp {
+                        rope: 0,
+                        particle: usize::MAX,
+                        offset: Vec3::new(0.0, -0.06, 0.0),
+                        start: 0.35,
+                        end: 0.85
+                    },
+                    Grasp {
+                        rope: 1,
+                        particle: usize::MAX,
+                        offset: Vec3::new(0.0, 0.06, 0.0),
+                        start: 0.35,
+                        end: 0.85
+                    },
+                    Grasp {
+                        rope: 2,
+                        particle: usize::MAX,
+                        offset: Vec3::new(0.06, 0.0, 0.0),
+                        start: 0.35,
+                        end: 0.85
+                    },
                 ],
                 alloc::vec![MovingBox {
                     first: at(0.3),
@@ -308,18 +351,26 @@ impl SeveralRopes {
         }
         let pulls = pulls
             .into_iter()
-            .filter_map(|(k, particle, offset, start, end)| {
-                let rope = keep.iter().position(|&x| x == k)?;
-                let particle = particle.min(ropes[rope].x.len() - 1);
-                let pull = Pull {
-                    particle,
-                    start: at(start),
-                    end: at(end),
-                    offset,
-                    circular: false,
-                };
-                Some((rope, pull, ropes[rope].x[particle]))
-            })
+            .filter_map(
+                |Grasp {
+                     rope: k,
+                     particle,
+                     offset,
+                     start,
+                     end,
+                 }| {
+                    let rope = keep.iter().position(|&x| x == k)?;
+                    let particle = particle.min(ropes[rope].x.len() - 1);
+                    let pull = Pull {
+                        particle,
+                        start: at(start),
+                        end: at(end),
+                        offset,
+                        circular: false,
+                    };
+                    Some((rope, pull, ropes[rope].x[particle]))
+                },
+            )
             .collect();
         let mut name = String::from(kind.name());
         match chosen {

@@ -227,3 +227,56 @@ impl MultiTracker {
 fn padded<'a>(masks: &'a [Mask], count: usize, empty: &'a Mask) -> Vec<&'a Mask> {
     (0..count).map(|k| masks.get(k).unwrap_or(empty)).collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::perception::camera::CameraIntrinsics;
+    use crate::perception::segmentation::HsvRange;
+    use crate::Params;
+
+    fn tracker(camera: CameraIntrinsics) -> Tracker {
+        Tracker::new(Params::default(), camera, HsvRange::default()).expect("tracker")
+    }
+
+    #[test]
+    fn a_multi_tracker_takes_one_to_eight_ropes_of_one_camera() {
+        let camera = CameraIntrinsics::D435I_640X480;
+        assert_eq!(
+            MultiTracker::new(Vec::new()).err(),
+            Some(TrackerError::RopeCount { count: 0 })
+        );
+        let nine = (0..9).map(|_| tracker(camera)).collect();
+        assert_eq!(
+            MultiTracker::new(nine).err(),
+            Some(TrackerError::RopeCount { count: 9 })
+        );
+        let mut other = camera;
+        other.fx += 1.0;
+        assert_eq!(
+            MultiTracker::new(alloc::vec![tracker(camera), tracker(other)]).err(),
+            Some(TrackerError::CameraMismatch { rope: 1 })
+        );
+        let eight = MultiTracker::new((0..8).map(|_| tracker(camera)).collect()).expect("eight");
+        assert_eq!(eight.ropes().len(), 8);
+    }
+
+    #[test]
+    fn a_frame_with_no_rope_leaves_every_rope_lost_without_a_panic() {
+        let camera = CameraIntrinsics::D435I_640X480;
+        let mut ropes =
+            MultiTracker::new(alloc::vec![tracker(camera), tracker(camera)]).expect("two");
+        let rgb = alloc::vec![0u8; 640 * 480 * 3];
+        let depth = alloc::vec![0u16; 640 * 480];
+        let frame = Frame::new(640, 480, &rgb, &depth, 0.001).expect("frame");
+        let out = ropes
+            .process(&frame, &[])
+            .expect("a frame of the camera's size");
+        assert_eq!(out.len(), 2);
+        assert!(out.iter().all(FrameOutput::is_lost));
+        // Fewer masks than ropes: the rope without one sees nothing.
+        let masks = ropes.segment(&frame, &[]).expect("masks");
+        let out = ropes.step(&frame, &masks[..1], Vec::new(), &[]);
+        assert_eq!(out.len(), 2);
+    }
+}

@@ -514,6 +514,24 @@ mod tests {
     use super::*;
     use alloc::vec;
 
+    #[test]
+    fn a_candidate_along_a_tracked_rope_is_taken_and_one_crossing_it_is_not() {
+        let taken = TakenRope {
+            line: (0..=10).map(|i| Vec2::new(10.0 * i as f64, 50.0)).collect(),
+            radius_px: 3.0,
+        };
+        let along: Vec<Vec2> = (0..60).map(|i| Vec2::new(10.0 + i as f64, 51.5)).collect();
+        let across: Vec<Vec2> = (0..60).map(|i| Vec2::new(40.0, 20.0 + i as f64)).collect();
+        let beside: Vec<Vec2> = (0..60).map(|i| Vec2::new(10.0 + i as f64, 58.0)).collect();
+        assert!(taken.covers(&along));
+        assert!(
+            !taken.covers(&across),
+            "a crossing shares a few pixels only"
+        );
+        assert!(!taken.covers(&beside), "a rope lying beside it is another");
+        assert!(!taken.covers(&[]));
+    }
+
     /// Draws a thick polyline (disc brush) into a mask.
     fn draw(mask: &mut Mask, curve: &[Vec2], radius: f64) {
         for w in curve.windows(2) {
