@@ -114,6 +114,7 @@ $('explain').onclick = guarded(() => (state.explain ? closeExplain() : openExpla
 $('explain-close').onclick = () => closeExplain();
 $('explain-back').onclick = () => moveStep(-1);
 $('explain-next').onclick = () => moveStep(1);
+$('explain-rope').onchange = guarded(() => state.explain && openExplain(state.explain.index));
 document.addEventListener('keydown', (e) => {
   if (!state.explain || e.target !== document.body) return;
   if (e.code === 'ArrowLeft') { e.preventDefault(); moveStep(-1); }

@@ -9,6 +9,17 @@ export const ctx = canvas.getContext('2d');
 // Node colours: line, visible node, hidden node, error curve.
 export const MAIN_COLOURS = { line: '#ffffff', visible: '#e02020', hidden: '#ffd000', curve: '#d02020' };
 export const COMPARED_COLOURS = { line: '#b8f4ff', visible: '#00e0ff', hidden: '#ff4fd8', curve: '#0098b8' };
+// With several ropes, rope k is drawn in ROPE_COLOURS[k] (the first as MAIN_COLOURS).
+export const ROPE_COLOURS = [
+  MAIN_COLOURS,
+  { line: '#ffffff', visible: '#2060ff', hidden: '#ffd000', curve: '#2040d0' },
+  { line: '#ffffff', visible: '#10b040', hidden: '#ffd000', curve: '#108030' },
+  { line: '#ffffff', visible: '#c040e0', hidden: '#ffd000', curve: '#9020b0' },
+  { line: '#ffffff', visible: '#ff8000', hidden: '#ffd000', curve: '#c06000' },
+  { line: '#ffffff', visible: '#00c0c0', hidden: '#ffd000', curve: '#008080' },
+  { line: '#ffffff', visible: '#808080', hidden: '#ffd000', curve: '#505050' },
+  { line: '#ffffff', visible: '#a06030', hidden: '#ffd000', curve: '#704020' },
+];
 const TRUTH_COLOUR = '#00d000';
 const DRAWN_RECT_COLOUR = '#ffcc00';
 
@@ -63,11 +74,12 @@ export function draw() {
   }
   if ($('show-truth').checked && state.truthPx) {
     ctx.strokeStyle = TRUTH_COLOUR; ctx.lineWidth = 1.5;
-    polyline(state.truthPx);
+    for (const t of state.truthsPx.length ? state.truthsPx : [state.truthPx]) polyline(t);
   }
   const res = state.results[i];
   if (res && res.second) drawNodes(res.second, COMPARED_COLOURS);
-  if (res) drawNodes(res, MAIN_COLOURS);
+  if (res && res.ropes.length) res.ropes.forEach((r, k) => drawNodes(r, ROPE_COLOURS[k % ROPE_COLOURS.length]));
+  else if (res) drawNodes(res, MAIN_COLOURS);
 }
 
 // A dashed rectangle being dragged, over the drawn frame.

@@ -214,14 +214,20 @@ export async function explainFrame(i, name, goTo, strict) {
   await goTo(i);
   const snapshot = i > 0 ? state.results[i - 1].snapshot.main : null;
   const [fields, transfer] = await frameFields(i, false);
-  const r = await call(Request.explain(fields, snapshot), transfer);
+  // With several ropes, the one picked beside the steps.
+  const ropes = state.seq.info.ropes || [];
+  const pick = $('explain-rope');
+  pick.hidden = ropes.length < 2;
+  if (pick.options.length !== ropes.length) pick.replaceChildren(...ropes.map((x, k) => new Option(x.name, String(k))));
+  const rope = ropes.length ? Number(pick.value || 0) : 0;
+  const r = await call(Request.explain(fields, snapshot, rope), transfer);
   const list = steps(r.view);
   let at = list.findIndex((s) => s.name === name);
   if (at < 0 && name && strict) throw new Error(`step=${name}: frame ${i} has the steps ${list.map((s) => s.name).join(', ')}`);
   if (at < 0) at = name && name.startsWith('em-') ? list.map((s) => s.name.startsWith('em-')).lastIndexOf(true) : 0;
   at = Math.max(0, at);
   state.explain = {
-    index: i, steps: list, at, view: r.view,
+    index: i, steps: list, at, view: r.view, rope: ropes.length ? ropes[rope].name : null,
     frame: { width: r.width, height: r.height, rgba: new Uint8ClampedArray(r.rgba), mask: new Uint8Array(r.mask) },
   };
   showStep();
@@ -232,7 +238,7 @@ export function showStep() {
   if (!e) return;
   const s = e.steps[e.at];
   s.draw();
-  $('explain-title').textContent = `Frame ${e.index}, step ${e.at + 1} of ${e.steps.length}: ${s.title}`;
+  $('explain-title').textContent = `Frame ${e.index}${e.rope ? `, ${e.rope}` : ''}, step ${e.at + 1} of ${e.steps.length}: ${s.title}`;
   $('explain-text').textContent = s.text;
   $('explain-back').disabled = e.at === 0;
   $('explain-next').disabled = e.at === e.steps.length - 1;

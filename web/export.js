@@ -5,8 +5,11 @@ import { resultFile } from './core.js';
 
 export function resultJson() {
   // Made by the core from the records its tracker produced: the command's format, field for field.
-  const records = state.results.slice(0, state.tracked + 1).map((r) => r.record);
-  return JSON.parse(resultFile(state.params, records));
+  const kept = state.results.slice(0, state.tracked + 1);
+  const records = kept.map((r) => r.record);
+  // Several ropes: every rope's records too.
+  const ropes = (state.seq.info.ropes || []).map((x, k) => ({ name: x.name, records: kept.map((r) => r.ropes[k].record) }));
+  return JSON.parse(resultFile(state.params, records, ropes.length ? ropes : null));
 }
 
 // The configuration in force as a dlo.json: the colour range, the

@@ -60,8 +60,9 @@ export function setMode(mode, on = false) {
   state.mode = state.mode === mode && !on ? 'none' : mode;
   $('draw-mode').classList.toggle('active', state.mode === 'draw');
   $('pick-mode').classList.toggle('active', state.mode === 'pick');
+  $('add-rope-mode').classList.toggle('active', state.mode === 'add');
   canvas.classList.toggle('drawing', state.mode === 'draw');
-  canvas.classList.toggle('picking', state.mode === 'pick');
+  canvas.classList.toggle('picking', state.mode === 'pick' || state.mode === 'add');
 }
 
 // The colour range around the pixel at (x, y) of the shown frame, and the
@@ -73,6 +74,36 @@ export function pickAt(x, y) {
   setHsvInputs(hsv);
   if (state.webcam || !state.seq) return applyHsv(hsv);
   return chooseRopeAt(x, y, hsv);
+}
+
+// Another rope tracked too: the one through (x, y) of the shown frame, in
+// the colour range around that pixel; the ropes are found again from here.
+export async function addRopeAt(x, y) {
+  if (state.webcam || !state.seq) throw new Error('open a sequence first: ropes are added to a sequence');
+  const f = state.frame;
+  const k = 4 * (y * f.width + x);
+  const hsv = hsvRangeAround(f.rgba[k], f.rgba[k + 1], f.rgba[k + 2]);
+  await state.busy;
+  await settleLookahead();
+  const { ropes } = await call(Request.addRope(hsv, [x, y]));
+  const info = state.seq.info;
+  const known = info.ropes && info.ropes.length ? info.ropes : [{ groundtruth: info.groundtruth }];
+  info.ropes = ropes.map((r, k) => ({ ...r, groundtruth: known[k] ? known[k].groundtruth : [] }));
+  // The frames before this one keep what was tracked; the new rope was not
+  // tracked on them (a lost record saying so).
+  const from = state.index;
+  state.results.forEach((r, i) => {
+    if (!r) return;
+    if (!r.ropes.length) r.ropes = [{ name: ropes[0].name, nodes: r.nodes, nodesPx: r.nodesPx, visible: r.visible, status: r.status, reason: r.reason, record: r.record, error: r.error }];
+    while (r.ropes.length < ropes.length) {
+      const reason = `not tracked yet: added on frame ${from}`;
+      r.ropes.push({
+        name: ropes[r.ropes.length].name, nodes: [], nodesPx: [], visible: [], status: 'lost', reason, error: [],
+        record: { frame: i, nodes: [], visible: [], track_ms: 0, total_ms: 0, lost: true, reason },
+      });
+    }
+  });
+  return retrackFromHere(true);
 }
 
 export function bindPanels() {
@@ -110,7 +141,7 @@ export function bindPanels() {
     const seq = state.seq;
     state.busy = state.busy.then(async () => {
       await settleLookahead();
-      await call(Request.open(seq.info.camera, state.params, state.hsv, state.rope, state.compare));
+      await call(Request.open(seq.info.camera, state.params, state.hsv, state.rope, state.compare, seq.info.ropes || []));
       state.results = [];
       state.tracked = -1;
     });
@@ -127,17 +158,19 @@ export function bindPanels() {
   });
   $('draw-mode').onclick = () => setMode('draw');
   $('pick-mode').onclick = () => setMode('pick');
+  $('add-rope-mode').onclick = () => setMode('add');
   $('clear-rects').onclick = () => { state.userRects = []; renderRects(); retrackFromHere(); };
   let dragStart = null;
   canvas.onmousedown = (e) => { if (state.mode === 'draw') dragStart = imagePoint(e); };
   canvas.onmousemove = (e) => { if (dragStart) drawDragged(dragStart, imagePoint(e)); };
   canvas.onmouseup = guarded(async (e) => {
-    if (state.mode === 'pick' && state.frame) {
+    if ((state.mode === 'pick' || state.mode === 'add') && state.frame) {
       const [x, y] = imagePoint(e);
-      setMode('pick');
+      const adding = state.mode === 'add';
+      setMode(state.mode);
       // The hint has been followed: it goes before the re-tracking starts.
       if (state.note) $('message').hidden = true;
-      await pickAt(x, y);
+      await (adding ? addRopeAt(x, y) : pickAt(x, y));
       return;
     }
     if (!dragStart) return;

@@ -46,7 +46,7 @@ export function keep(r) {
     nodes: r.nodes, nodesPx: r.nodesPx, visible: r.visible, status: r.status, reason: r.reason, init: r.init || null,
     segmentMs: r.segmentMs, cloudMs: r.cloudMs, trackMs: r.trackMs, totalMs: r.totalMs, decodeMs: r.decodeMs,
     error: r.error, snapshot: r.snapshot, record: r.record,
-    second: r.second || null,
+    second: r.second || null, ropes: r.ropes || [],
   };
 }
 
@@ -91,6 +91,9 @@ async function goToNow(i) {
   };
   const gt = state.seq.info.groundtruth[i];
   state.truthPx = gt ? projectPoints(state.seq.info.camera, new Float64Array(gt)) : null;
+  // Several ropes: every rope's truth.
+  state.truthsPx = (state.seq.info.ropes || []).map((r) => r.groundtruth[i])
+    .filter(Boolean).map((t) => projectPoints(state.seq.info.camera, new Float64Array(t)));
   render();
 }
 

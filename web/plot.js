@@ -1,7 +1,7 @@
 // The frame-error plot and the statistics lines under the image. Means and
 // medians come from the core (errorStats), as in `upetrack eval`.
 import { state, $, ALGORITHM_NAMES } from './state.js';
-import { MAIN_COLOURS, COMPARED_COLOURS } from './draw.js';
+import { MAIN_COLOURS, COMPARED_COLOURS, ROPE_COLOURS } from './draw.js';
 import { errorStats } from './core.js';
 
 const stats = (xs) => errorStats(new Float64Array(xs));
@@ -57,6 +57,9 @@ export function updateLabels(page = pageStats()) {
     `display ${fixed(fps, 1)} frames/s   visible nodes ${r ? r.visible.filter((v) => v).length : '-'} of ${r ? r.visible.length : '-'}`,
     r && r.error.length ? `frame error ${r.error[0].toFixed(2)} mm, ${r.error[1].toFixed(2)} px (${ALGORITHM_NAMES[state.params.algorithm]}, red)` : 'no ground truth for this frame',
   ];
+  if (r && r.ropes.length) {
+    lines.push(`ropes: ${r.ropes.map((x) => `${x.name} ${x.status}${x.error.length ? ` ${x.error[0].toFixed(2)} mm` : ''}`).join('   ')}`);
+  }
   const c = r && r.second;
   if (c) {
     const err = c.error.length ? `frame error ${c.error[0].toFixed(2)} mm, ${c.error[1].toFixed(2)} px` : 'no ground truth';
@@ -70,7 +73,10 @@ export function drawPlot() {
   const g = c.getContext('2d');
   g.clearRect(0, 0, c.width, c.height);
   const n = state.seq.info.color_files.length;
-  const series = [{ name: state.params.algorithm, colours: MAIN_COLOURS, of: (r) => r }];
+  const ropes = state.seq.info.ropes || [];
+  const series = ropes.length
+    ? ropes.map((rope, k) => ({ name: state.params.algorithm, rope: rope.name, colours: ROPE_COLOURS[k % ROPE_COLOURS.length], of: (r) => r.ropes[k] }))
+    : [{ name: state.params.algorithm, colours: MAIN_COLOURS, of: (r) => r }];
   if (state.compare) series.push({ name: state.compare, colours: COMPARED_COLOURS, of: (r) => r.second });
   for (const s of series) {
     s.errs = state.results.map((r, k) => {
@@ -94,7 +100,8 @@ export function drawPlot() {
     const mm = stats(s.errs.map((e) => e[1])).mean;
     const px = stats(s.errs.map((e) => e[2])).mean;
     g.setLineDash([4, 3]); g.beginPath(); g.moveTo(30, y(mm)); g.lineTo(c.width - 10, y(mm)); g.stroke(); g.setLineDash([]);
-    labels.push(`${ALGORITHM_NAMES[s.name]} mean ${mm.toFixed(2)} mm, ${px.toFixed(2)} px over ${s.errs.length} frames`);
+    const who = s.rope ? `${s.rope} (${ALGORITHM_NAMES[s.name]})` : ALGORITHM_NAMES[s.name];
+    labels.push(`${who} mean ${mm.toFixed(2)} mm, ${px.toFixed(2)} px over ${s.errs.length} frames`);
   }
   g.strokeStyle = '#000'; g.beginPath(); g.moveTo(x(state.index), 5); g.lineTo(x(state.index), c.height - 15); g.stroke();
   $('plot-label').textContent = `Frame error (mm) over time (dashed: means). ${labels.join('; ')}.`;

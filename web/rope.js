@@ -18,7 +18,14 @@ export function noteRopeFinding(k, r) {
   if (notedEpoch === state.epoch) return;
   const init = r.init;
   let text = null;
-  if (init && ((init.candidates.length > 1 && init.rule !== 'clicked') || init.hint_missed)) {
+  const missing = (r.ropes || []).filter((x) => x.status === 'lost');
+  if (r.ropes && r.ropes.length) {
+    // Several ropes: each takes a candidate of its colour the others have
+    // not; say which were not found.
+    if (missing.length) {
+      text = `Frame ${k}: ${missing.map((x) => `${x.name} not found (${(x.reason || '').replace(/^not initialised: /, '')})`).join('; ')}.`;
+    }
+  } else if (init && ((init.candidates.length > 1 && init.rule !== 'clicked') || init.hint_missed)) {
     const c = init.candidates[init.chosen];
     const how = init.rule === 'clicked' ? 'the one clicked' : init.rule === 'nearest_previous' ? 'the one nearest the rope tracked before' : 'the longest';
     text = `Frame ${k}: ${init.candidates.length} rope-shaped candidates in the colour range; tracking ${how} ` +

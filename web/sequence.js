@@ -50,7 +50,7 @@ async function finishOpening(generation, seq) {
   const { info } = seq;
   hooks.closing();
   await settleLookahead();
-  await call(Request.open(info.camera, state.params, info.hsv, info.rope || null, state.compare));
+  await call(Request.open(info.camera, state.params, info.hsv, info.rope || null, state.compare, info.ropes || []));
   if (generation !== state.generation) return;
   state.seq = seq;
   state.rope = info.rope || null;
@@ -200,7 +200,8 @@ export async function frameFields(i, track) {
   const fields = {
     index: i, track, color, depth, colorName: info.color_files[i], depthName: info.depth_files[i],
     fromZip: seq.fromZip, fromRecording: seq.fromRecording, depthScale: info.depth_scale, occlusions: activeRects(i),
-    groundtruth: info.groundtruth[i], wantMask: $('show-mask').checked, wantDepth: $('show-depth').checked,
+    groundtruth: info.groundtruth[i], ropeTruths: (info.ropes || []).map((r) => r.groundtruth[i]),
+    wantMask: $('show-mask').checked, wantDepth: $('show-depth').checked,
     decoder: state.decoder,
   };
   return [fields, transfer];

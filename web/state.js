@@ -20,6 +20,7 @@ export const state = {
   busy: Promise.resolve(),
   frame: null,        // last decoded frame { width, height, rgba, mask, depth, decodeMs }
   truthPx: null,      // ground truth of the shown frame in pixels
+  truthsPx: [],       // with several ropes, each one's
   mode: 'none',       // 'draw' | 'pick'
   explain: null,      // the explain mode: { index, steps, at, view, frame }, or null
   webcam: null,       // the webcam mode: { stream, video, frames, depthScale }, or null

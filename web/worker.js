@@ -30,9 +30,29 @@ function track(t, f, m) {
     status: r.status, reason: r.reason ?? null, init: r.init, segmentMs: r.segment_ms, cloudMs: r.cloud_ms, trackMs: r.track_ms, totalMs: r.total_ms,
     cloudPoints: r.cloud_points, record: r.record,
   };
+  const ropes = r.ropes;
   r.free();
   out.error = m.groundtruth ? Array.from(t.lastError(new Float64Array(m.groundtruth))) : [];
+  // Several ropes: each one's nodes and error against its own truth.
+  out.ropes = ropes.map((x, k) => {
+    const truth = m.ropeTruths[k];
+    return {
+      name: x.name, nodes: x.nodes, nodesPx: x.nodes_px, visible: x.visible.map((v) => (v ? 1 : 0)),
+      status: x.status, reason: x.reason ?? null, record: x.record,
+      error: truth ? Array.from(t.lastErrorOf(k, new Float64Array(truth))) : [],
+    };
+  });
   return out;
+}
+
+// A tracker of the opened sequence (its ropes, if several, each with the
+// pixel clicked on it, if any).
+function makeTracker(o, params) {
+  const ropes = o.ropes.length ? o.ropes.map(({ name, hsv, rope }) => ({ name, hsv, rope })) : null;
+  const t = new WasmTracker({ camera: o.camera, params, hsv: o.hsv, rope: o.rope, ropes });
+  if (!ropes && o.hint) t.setRopeHint(o.hint[0], o.hint[1]);
+  o.ropes.forEach((r, k) => { if (r.hint) t.setRopeHintOf(k, r.hint[0], r.hint[1]); });
+  return t;
 }
 
 // What the browser's decoders must leave alone for the pixels to be the file's.
@@ -175,13 +195,29 @@ const handlers = {
     if (tracker) tracker.free();
     if (second) second.free();
     const params = checked(m.params);
-    tracker = new WasmTracker({ camera: m.camera, params, hsv: m.hsv, rope: m.rope || null });
-    opened = { camera: m.camera, hsv: m.hsv, rope: m.rope || null, hint: null };
+    const ropes = (m.ropes || []).map((r) => ({ name: r.name, hsv: r.hsv, rope: r.rope, hint: r.hint || null }));
+    opened = { camera: m.camera, hsv: m.hsv, rope: m.rope || null, hint: null, ropes };
+    tracker = makeTracker(opened, params);
     secondAlgorithm = m.compare || null;
-    second = secondAlgorithm
-      ? new WasmTracker({ camera: m.camera, params: { ...params, algorithm: secondAlgorithm }, hsv: m.hsv, rope: m.rope || null })
-      : null;
+    second = secondAlgorithm ? makeTracker(opened, { ...params, algorithm: secondAlgorithm }) : null;
     return {};
+  },
+  // One more rope, of the colour `hsv`, through the pixel `hint`: every
+  // tracker is made again with it (the ropes are found again from the
+  // shown frame on).
+  addRope: (m) => {
+    if (!opened) throw new Error('no sequence is open');
+    if (!opened.ropes.length) opened.ropes = [{ name: 'rope-0', hsv: opened.hsv, rope: opened.rope, hint: opened.hint }];
+    if (opened.ropes.length >= 8) throw new Error('8 ropes at most are tracked at once');
+    opened.ropes.push({ name: `rope-${opened.ropes.length}`, hsv: m.hsv, rope: null, hint: m.hint });
+    const params = tracker.params();
+    tracker.free();
+    tracker = makeTracker(opened, params);
+    if (second) {
+      second.free();
+      second = makeTracker(opened, { ...params, algorithm: secondAlgorithm });
+    }
+    return { ropes: opened.ropes.map(({ name, hsv, rope, hint }) => ({ name, hsv, rope, hint })) };
   },
   rope: (m) => {
     for (const t of [tracker, second]) {
@@ -190,6 +226,7 @@ const handlers = {
       if (m.hint) t.setRopeHint(m.hint[0], m.hint[1]);
     }
     if (opened) Object.assign(opened, { rope: m.prior, hint: m.hint || opened.hint });
+    if (opened && opened.ropes.length) Object.assign(opened.ropes[0], { rope: m.prior, hint: m.hint || opened.ropes[0].hint });
     return {};
   },
   params: (m) => {
@@ -208,11 +245,10 @@ const handlers = {
   explain: async (m, early) => {
     if (!opened) throw new Error('no sequence is open');
     const [f] = await decode(m, early);
-    const t = new WasmTracker({ camera: opened.camera, params: tracker.params(), hsv: opened.hsv, rope: opened.rope });
-    if (opened.hint) t.setRopeHint(opened.hint[0], opened.hint[1]);
+    const t = makeTracker(opened, tracker.params());
     try {
       t.restore(m.snapshot);
-      const view = t.explain(f, m.depthScale, new Float64Array(m.occlusions));
+      const view = t.explainRope(m.rope || 0, f, m.depthScale, new Float64Array(m.occlusions));
       const mask = t.lastMask();
       const rgba = f.rgba;
       return [{ view, rgba: rgba.buffer, mask: mask.buffer, width: f.width, height: f.height }, [rgba.buffer, mask.buffer]];

@@ -105,7 +105,6 @@ fn synth_several(kind: SeveralKind, args: &SynthArgs) -> Result<(), CliError> {
         ("count", args.count.is_some()),
         ("hd", args.hd),
         ("variant", args.variant.is_some()),
-        ("depth-noise", args.depth_noise.is_some()),
         ("y4m", args.y4m.is_some()),
     ];
     if let Some((name, _)) = refused.iter().find(|(_, given)| *given) {
@@ -129,18 +128,19 @@ fn synth_several(kind: SeveralKind, args: &SynthArgs) -> Result<(), CliError> {
         }
         (None, None) => SeveralRopes::new(kind, frames, args.seed),
     };
+    let mut scene = scene;
+    scene.render.depth_noise_multiplier *= args.depth_noise.unwrap_or(1.0);
     let start = Instant::now();
     let bar = progress::bar(frames as u64, "frames", kind.name());
     let dir = args.dir.as_path();
-    let n = upetrack_io::synthetic_several::write_several(scene, args.rope_prior, &mut |(
-        path,
-        bytes,
-    )| {
+    let (prior, quality) = (args.rope_prior, args.jpeg_quality);
+    let mut put = |(path, bytes): (String, Vec<u8>)| {
         if path.starts_with("color/") {
             bar.inc(1);
         }
         write_file(&dir.join(path), &bytes)
-    })?;
+    };
+    let n = upetrack_io::synthetic_several::write_several(scene, prior, quality, &mut put)?;
     bar.finish_and_clear();
     eprintln!(
         "{}: {n} frames of {} written in {:.1} s",

@@ -71,7 +71,12 @@ pub fn frame_record(index: usize, t: &TimedFrame) -> FrameRecord {
 }
 
 /// The record of frame `index` from a tracker's `output` and its times.
-fn output_record(index: usize, output: &FrameOutput, track_ms: f64, total_ms: f64) -> FrameRecord {
+pub fn output_record(
+    index: usize,
+    output: &FrameOutput,
+    track_ms: f64,
+    total_ms: f64,
+) -> FrameRecord {
     let reason = match &output.status {
         FrameStatus::Lost(r) => Some(r.to_string()),
         _ => None,
@@ -100,6 +105,26 @@ pub fn track_result(params: Params, mut frames: Vec<FrameRecord>) -> TrackResult
         frames,
         ropes: Vec::new(),
     }
+}
+
+/// A whole result of several ropes from each one's name and frames'
+/// records (numbered by position): `frames` the first's, `ropes` every
+/// one's; with one rope, [`track_result`]'s.
+pub fn several_result(params: Params, ropes: Vec<(String, Vec<FrameRecord>)>) -> TrackResult {
+    let several = ropes.len() > 1;
+    let mut ropes: Vec<RopeResult> = ropes
+        .into_iter()
+        .map(|(name, frames)| RopeResult {
+            name,
+            frames: track_result(params, frames).frames,
+        })
+        .collect();
+    let first = ropes.first().map(|r| r.frames.clone()).unwrap_or_default();
+    let mut result = track_result(params, first);
+    if several {
+        result.ropes = core::mem::take(&mut ropes);
+    }
+    result
 }
 
 /// Several ropes' records of one frame, timed as one: `total_ms` from the
@@ -197,20 +222,15 @@ impl SequenceRun {
 
     /// The result of the frames pushed so far.
     pub fn finish(self) -> TrackResult {
-        let mut ropes = self.records.into_iter();
-        let first = ropes.next().unwrap_or_default();
-        let mut result = track_result(self.params, first.clone());
-        if let Runner::Several { names, .. } = self.runner {
-            result.ropes = names
-                .into_iter()
-                .zip(core::iter::once(first).chain(ropes))
-                .map(|(name, frames)| RopeResult {
-                    name,
-                    frames: track_result(self.params, frames).frames,
-                })
-                .collect();
+        match self.runner {
+            Runner::Several { names, .. } => {
+                several_result(self.params, names.into_iter().zip(self.records).collect())
+            }
+            Runner::One(_) => track_result(
+                self.params,
+                self.records.into_iter().next().unwrap_or_default(),
+            ),
         }
-        result
     }
 }
 

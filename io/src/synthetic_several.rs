@@ -10,7 +10,7 @@ use crate::sequence::{DloConfig, GroundTruthFile, IntrinsicsFile, RopeConfig, Se
 use crate::synthetic::{
     frame_files, truth_frame, SequenceFile, SYNTHETIC_DEPTH_SCALE, SYNTHETIC_FPS,
 };
-use crate::write::{compact_json_bytes, json_bytes, JPEG_QUALITY};
+use crate::write::{compact_json_bytes, json_bytes};
 
 /// Rope `name`'s ground-truth file.
 pub fn groundtruth_file(name: &str) -> String {
@@ -18,10 +18,12 @@ pub fn groundtruth_file(name: &str) -> String {
 }
 
 /// Writes every file of `scene` through `put` (with the ropes' lengths
-/// and diameters in `dlo.json` when `rope_prior`); returns the frame count.
+/// and diameters in `dlo.json` when `rope_prior`; colour at JPEG
+/// `quality`, 1..=100, clamped); returns the frame count.
 pub fn write_several(
     mut scene: SeveralRopes,
     rope_prior: bool,
+    quality: u8,
     put: &mut dyn FnMut(SequenceFile) -> Result<(), SequenceError>,
 ) -> Result<usize, SequenceError> {
     let camera = scene.camera();
@@ -53,7 +55,7 @@ pub fn write_several(
     let mut truths = vec![GroundTruthFile::default(); scene.ropes.len()];
     let mut written = 0;
     while let Some(f) = scene.next_frame() {
-        for file in frame_files(f.index, &camera, &f.rgb, &f.depth, JPEG_QUALITY)? {
+        for file in frame_files(f.index, &camera, &f.rgb, &f.depth, quality.clamp(1, 100))? {
             put(file)?;
         }
         for (truth, rope) in truths.iter_mut().zip(f.ropes) {

@@ -13,6 +13,7 @@ extern crate alloc;
 pub mod camera_path;
 mod drawn;
 mod ease;
+mod events;
 mod layout;
 pub mod random;
 pub mod render;

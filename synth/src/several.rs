@@ -11,12 +11,13 @@ use upetrack::math::Vec3;
 use upetrack::rng::SplitMix64;
 use upetrack::{CameraIntrinsics, HsvRange};
 
+use crate::events::{BoxPath, MovingBox, Pull};
 use crate::render::{
     hidden_by_boxes, hidden_by_ropes, render_ropes, rope_hsv, CameraPose, OccluderBox,
     RenderSettings, RopeLook,
 };
 use crate::rope::{Obstacle, Rope, RopeSettings};
-use crate::scenario::{BoxPath, MovingBox, Pull, SETTLING_FRAMES};
+use crate::scenario::SETTLING_FRAMES;
 use crate::MAX_FRAMES;
 
 /// The blue of the single-rope scenarios.

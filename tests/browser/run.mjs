@@ -820,6 +820,77 @@ await test('webcam mode: Chromium\'s fake camera plays a synthetic rope; a click
   await ctx2.close();
 });
 
+await test('two ropes of one colour: both drawn, each with its own error, the result as the command\'s, each rope explained', async () => {
+  const page = await newPage('?sample=two-ropes-crossing&autoplay=0');
+  const web = await page.evaluate(() => window.upetrack.trackAll());
+  const twoJson = path.join(tmp, 'two-ropes.json');
+  execFileSync(native, ['track', path.join(root, 'samples/two-ropes-crossing'), '--out', twoJson]);
+  const ref = JSON.parse(fs.readFileSync(twoJson, 'utf8'));
+  assert(web.ropes && web.ropes.length === 2, `ropes in the page's result: ${web.ropes && web.ropes.length}`);
+  assert(ref.ropes.map((r) => r.name).join() === web.ropes.map((r) => r.name).join(), 'rope names differ');
+  let worst = 0;
+  ref.ropes.forEach((r, k) => r.frames.forEach((f, i) => f.nodes.forEach((p, j) => p.forEach((c, d) => {
+    worst = Math.max(worst, Math.abs(c - web.ropes[k].frames[i].nodes[j][d]));
+  }))));
+  console.log(`     largest difference from the command ${worst.toExponential(2)} m over 2 ropes`);
+  assert(worst === 0, `largest difference ${worst}`);
+  // Each rope drawn over its own ground truth: its error in the state.
+  const s = await page.evaluate(() => {
+    const r = window.upetrack.state.results;
+    return { errors: r.map((x) => x.ropes.map((y) => (y.error.length ? y.error[0] : NaN))), label: document.getElementById('plot-label').textContent, stats: document.getElementById('stats').textContent };
+  });
+  const worstMm = Math.max(...s.errors.flat());
+  console.log(`     worst frame error of either rope ${worstMm.toFixed(2)} mm`);
+  assert(s.errors.every((e) => e.length === 2) && worstMm < 5, `errors ${JSON.stringify(s.errors.slice(-3))}`);
+  assert(/blue-a .*blue-b /.test(s.label), `plot label: ${s.label}`);
+  assert(/ropes: blue-a .* blue-b/.test(s.stats), `stats: ${s.stats}`);
+  await page.screenshot({ path: path.join(artifacts, 'two-ropes.png') });
+  // The second rope's update explained.
+  await page.click('#explain');
+  await page.waitForFunction(() => window.upetrack.state.explain && !document.getElementById('explain-rope').hidden, null, { timeout: 30000 });
+  await page.selectOption('#explain-rope', '1');
+  await page.waitForFunction(() => /blue-b/.test(document.getElementById('explain-title').textContent), null, { timeout: 30000 });
+  await page.screenshot({ path: path.join(artifacts, 'two-ropes-explain.png') });
+  await page.close();
+});
+
+await test('a second rope is added by a click: from that frame on both are tracked, each in its colour', async () => {
+  // The two-rope sample as one rope's sequence: its dlo.json without `ropes`.
+  const one = path.join(tmp, 'one-of-two');
+  fs.cpSync(path.join(root, 'samples/two-ropes-crossing'), one, { recursive: true });
+  const dlo = JSON.parse(fs.readFileSync(path.join(one, 'dlo.json'), 'utf8'));
+  delete dlo.ropes;
+  fs.writeFileSync(path.join(one, 'dlo.json'), JSON.stringify(dlo));
+  const page = await newPage('?autoplay=0');
+  await page.setInputFiles('#folder', one);
+  await page.waitForFunction(() => window.upetrack.state.seq && window.upetrack.state.seq.name === 'one-of-two' && window.upetrack.state.tracked >= 0, null, { timeout: 30000 });
+  // Rope b (the upper one) where it is at frame 0, away from the crossing.
+  const truthB = JSON.parse(fs.readFileSync(path.join(one, 'groundtruth-blue-b.json'), 'utf8')).frames[0].points[8];
+  const cam = JSON.parse(fs.readFileSync(path.join(one, 'camera_intrinsic.json'), 'utf8')).intrinsic_matrix;
+  const [u, v] = [cam[0] * truthB[0] / truthB[2] + cam[6], cam[4] * truthB[1] / truthB[2] + cam[7]];
+  await page.click('#add-rope-mode');
+  // The button is down the side panel: the image back in view to click it.
+  await page.locator('#canvas').scrollIntoViewIfNeeded();
+  const box = await page.locator('#canvas').boundingBox();
+  await page.mouse.click(box.x + (u + 0.5) * box.width / 640, box.y + (v + 0.5) * box.height / 480);
+  await page.waitForFunction(() => {
+    const s = window.upetrack.state;
+    return s.seq.info.ropes && s.seq.info.ropes.length === 2 && s.results[s.index] && s.results[s.index].ropes.length === 2;
+  }, null, { timeout: 30000 });
+  const web = await page.evaluate(() => window.upetrack.trackAll());
+  assert(web.ropes && web.ropes.length === 2, 'two ropes in the result');
+  // The added rope lies on rope b: its nodes near b's truth on the last frame.
+  const last = web.ropes[1].frames[web.ropes[1].frames.length - 1];
+  const truth = JSON.parse(fs.readFileSync(path.join(one, 'groundtruth-blue-b.json'), 'utf8')).frames.at(-1).points;
+  const nearest = (p) => Math.min(...truth.map((q) => Math.hypot(p[0] - q[0], p[1] - q[1], p[2] - q[2])));
+  const mean = last.nodes.reduce((a, p) => a + nearest(p), 0) / last.nodes.length;
+  console.log(`     added rope on the last frame: ${(mean * 1000).toFixed(2)} mm from rope b's truth`);
+  assert(!last.lost && mean < 0.005, `added rope ${JSON.stringify(last).slice(0, 200)}`);
+  assert(web.ropes[0].frames.every((f) => !f.lost), 'the first rope is tracked throughout');
+  await page.screenshot({ path: path.join(artifacts, 'rope-added.png') });
+  await page.close();
+});
+
 await test('no console errors and no request leaves the origin', async () => {
   const outside = requests.filter((u) => !u.startsWith(origin) && !u.startsWith('blob:') && !u.startsWith('data:'));
   assert(outside.length === 0, `requests outside the origin: ${outside.slice(0, 5)}`);

@@ -4,19 +4,36 @@
 
 use upetrack::Params;
 use upetrack_io::result::FrameRecord;
-use upetrack_io::run::track_result;
+use upetrack_io::run::{several_result, track_result};
 use upetrack_io::sequence::OcclusionConfig;
 use wasm_bindgen::prelude::*;
 
 use crate::js_err;
 
 /// The result JSON (text) of `params` and the frames' `record`s, in order:
-/// what `upetrack track` writes for the same frames.
+/// what `upetrack track` writes for the same frames. With several ropes,
+/// `ropes` is `[{name, records}]` (every rope's, the first's repeating
+/// `records`); `null` or absent for one.
 #[wasm_bindgen(js_name = resultFile)]
-pub fn result_file(params: JsValue, records: JsValue) -> Result<String, JsError> {
+pub fn result_file(params: JsValue, records: JsValue, ropes: JsValue) -> Result<String, JsError> {
     let params: Params = serde_wasm_bindgen::from_value(params).map_err(js_err)?;
     let records: Vec<FrameRecord> = serde_wasm_bindgen::from_value(records).map_err(js_err)?;
-    serde_json::to_string(&track_result(params, records)).map_err(js_err)
+    let ropes: Option<Vec<RopeRecords>> = serde_wasm_bindgen::from_value(ropes).map_err(js_err)?;
+    let result = match ropes {
+        Some(ropes) if ropes.len() > 1 => several_result(
+            params,
+            ropes.into_iter().map(|r| (r.name, r.records)).collect(),
+        ),
+        _ => track_result(params, records),
+    };
+    serde_json::to_string(&result).map_err(js_err)
+}
+
+/// One rope's records, for [`result_file`].
+#[derive(serde::Deserialize)]
+struct RopeRecords {
+    name: String,
+    records: Vec<FrameRecord>,
 }
 
 /// The rectangles of `occlusions` (a `dlo.json`'s list) in force on frame

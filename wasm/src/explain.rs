@@ -79,6 +79,19 @@ impl WasmTracker {
         depth_scale: f64,
         occlusions: &[f64],
     ) -> Result<JsValue, JsError> {
+        self.explain_rope(0, frame, depth_scale, occlusions)
+    }
+
+    /// [`WasmTracker::explain`] for rope `k` of several: its update from
+    /// its share of the frame beside the other ropes as they stand.
+    #[wasm_bindgen(js_name = explainRope)]
+    pub fn explain_rope(
+        &mut self,
+        k: usize,
+        frame: &DecodedFrame,
+        depth_scale: f64,
+        occlusions: &[f64],
+    ) -> Result<JsValue, JsError> {
         let f = Frame::new(
             frame.width,
             frame.height,
@@ -88,10 +101,16 @@ impl WasmTracker {
         )
         .map_err(js_err)?;
         let rects = rects_of(occlusions)?;
-        let obs = self.tracker.observe(&f, &rects).map_err(js_err)?;
-        let e = self.tracker.explain(&f, &obs);
-        let camera = *self.tracker.camera();
-        let params = self.tracker.params();
+        let count = self.rope_count();
+        let obs = self
+            .ropes
+            .observe_rope(k, &f, &rects)
+            .map_err(js_err)?
+            .ok_or_else(|| JsError::new(&format!("explainRope: rope {k} of {count}")))?;
+        let tracker = &self.ropes.ropes()[k];
+        let e = tracker.explain(&f, &obs);
+        let camera = *tracker.camera();
+        let params = tracker.params();
         let px = |points: &[Vec3]| project_all(&camera, points);
         let radius_px = e
             .previous
@@ -160,6 +179,7 @@ impl WasmTracker {
             length_before_mm: step.map_or(f64::NAN, |s| length_mm(&s.before_resampling)),
             length_after_mm: step.map_or(f64::NAN, |s| length_mm(&s.resampled)),
         };
+        self.last_masks = None;
         self.last_obs = Some(obs);
         to_js(&view)
     }

@@ -3,11 +3,12 @@
 //! typed arrays, image and .zip decoding, and sequence metadata parsing.
 #![warn(missing_docs)]
 
+use ropes::{flat_truth, RopeFrame, RopeInfo, RopeOptions};
 use serde::{Deserialize, Serialize};
 use upetrack::metrics::{frame_error, frame_error_px};
 use upetrack::perception::initialisation::InitReport;
 use upetrack::tracker::{FrameOutput, FrameStatus, Observation};
-use upetrack::{CameraIntrinsics, Frame, HsvRange, Params, Rect, Tracker, Vec3};
+use upetrack::{CameraIntrinsics, Frame, HsvRange, MultiTracker, Params, Rect, Tracker, Vec3};
 use upetrack_io::decode::{decode_color, decode_depth};
 use upetrack_io::result::FrameRecord;
 use upetrack_io::run::{frame_record, run_frame};
@@ -19,6 +20,7 @@ mod browser;
 mod contract;
 mod explain;
 mod recording;
+mod ropes;
 mod scene;
 
 fn js_err(e: impl std::fmt::Display) -> JsError {
@@ -97,7 +99,8 @@ fn now_ms() -> f64 {
         .unwrap_or(0.0)
 }
 
-/// Options of a tracker: `{ camera: {width, height, fx, fy, cx, cy}, params?, hsv? }`.
+/// Options of a tracker: `{ camera: {width, height, fx, fy, cx, cy},
+/// params?, hsv?, rope?, ropes? }`.
 #[derive(Deserialize)]
 struct TrackerOptions {
     camera: CameraIntrinsics,
@@ -108,6 +111,10 @@ struct TrackerOptions {
     /// `dlo.json`'s `rope`.
     #[serde(default)]
     rope: Option<RopeConfig>,
+    /// Several ropes (`dlo.json`'s `ropes`): each with its colour range and
+    /// prior (`hsv` and `rope` for those it does not give).
+    #[serde(default)]
+    ropes: Option<Vec<RopeOptions>>,
 }
 
 /// A value as plain JS objects (maps too: `Params` flattens UPETrack's
@@ -135,9 +142,16 @@ pub fn default_params() -> Result<JsValue, JsError> {
 /// The tracker of one sequence.
 #[wasm_bindgen]
 pub struct WasmTracker {
-    tracker: Tracker,
+    /// Every rope's tracker (one, unless `ropes` was given).
+    ropes: MultiTracker,
+    /// Each rope's name.
+    names: Vec<String>,
+    /// The first rope's last observation (one rope).
     last_obs: Option<Observation>,
-    last: Option<FrameOutput>,
+    /// The union of the ropes' colour masks of the last frame (several).
+    last_masks: Option<Vec<u8>>,
+    /// Every rope's last output.
+    last: Vec<FrameOutput>,
 }
 
 /// The result of one frame; arrays are copied out as typed arrays.
@@ -160,6 +174,8 @@ pub struct FrameResult {
     pub cloud_points: u32,
     init: Option<InitReport>,
     record: FrameRecord,
+    /// Every rope's result, with several ropes (empty for one).
+    ropes: Vec<RopeFrame>,
 }
 
 #[wasm_bindgen]
@@ -214,48 +230,91 @@ impl FrameResult {
     pub fn init_text(&self) -> Option<String> {
         self.init.as_ref().map(|r| r.to_string())
     }
+    /// With several ropes, each one's `{name, nodes, nodes_px, visible,
+    /// status, reason, record}` (the first's also as this result's own
+    /// fields); an empty array for one rope.
+    #[wasm_bindgen(getter)]
+    pub fn ropes(&self) -> Result<JsValue, JsError> {
+        self.ropes
+            .serialize(&serde_wasm_bindgen::Serializer::json_compatible())
+            .map_err(js_err)
+    }
+}
+
+/// `initialised`, `tracked`, `recovered` or `lost`, and why when lost.
+fn status_of(out: &FrameOutput) -> (&'static str, Option<String>) {
+    match &out.status {
+        FrameStatus::Initialised => ("initialised", None),
+        FrameStatus::Tracked => ("tracked", None),
+        FrameStatus::Recovered => ("recovered", None),
+        FrameStatus::Lost(r) => ("lost", Some(r.to_string())),
+    }
 }
 
 #[wasm_bindgen]
 impl WasmTracker {
-    /// A tracker from `{ camera, params?, hsv? }`; missing parameters take their defaults.
+    /// A tracker from `{ camera, params?, hsv?, rope?, ropes? }`; missing
+    /// parameters take their defaults. `ropes` (`[{name?, hsv?, rope?}]`,
+    /// 1 to 8) tracks several ropes at once.
     #[wasm_bindgen(constructor)]
     pub fn new(options: JsValue) -> Result<WasmTracker, JsError> {
         let o: TrackerOptions = serde_wasm_bindgen::from_value(options).map_err(js_err)?;
-        let mut tracker = Tracker::new(
-            o.params.unwrap_or_default(),
-            o.camera,
-            o.hsv.unwrap_or_default(),
-        )
-        .map_err(js_err)?;
-        if let Some(rope) = o.rope {
-            tracker.set_rope_prior(rope.prior()).map_err(js_err)?;
+        let params = o.params.unwrap_or_default();
+        let specs = o.ropes.unwrap_or_else(|| {
+            vec![RopeOptions {
+                name: None,
+                hsv: None,
+                rope: None,
+            }]
+        });
+        let mut trackers = Vec::with_capacity(specs.len());
+        let mut names = Vec::with_capacity(specs.len());
+        for (k, spec) in specs.iter().enumerate() {
+            let hsv = spec.hsv.or(o.hsv).unwrap_or_default();
+            let mut tracker = Tracker::new(params, o.camera, hsv).map_err(js_err)?;
+            if let Some(rope) = spec.rope.or(o.rope) {
+                tracker.set_rope_prior(rope.prior()).map_err(js_err)?;
+            }
+            trackers.push(tracker);
+            names.push(spec.name.clone().unwrap_or_else(|| format!("rope-{k}")));
         }
         Ok(Self {
-            tracker,
+            ropes: MultiTracker::new(trackers).map_err(js_err)?,
+            names,
             last_obs: None,
-            last: None,
+            last_masks: None,
+            last: Vec::new(),
         })
+    }
+
+    /// Number of ropes tracked.
+    #[wasm_bindgen(getter, js_name = ropeCount)]
+    pub fn rope_count(&self) -> usize {
+        self.ropes.ropes().len()
     }
 
     /// Replaces the parameters (a full or partial object); effective next frame.
     #[wasm_bindgen(js_name = setParams)]
     pub fn set_params(&mut self, params: JsValue) -> Result<(), JsError> {
         let p: Params = serde_wasm_bindgen::from_value(params).map_err(js_err)?;
-        self.tracker.set_params(p).map_err(js_err)
+        for t in self.ropes.ropes_mut() {
+            t.set_params(p).map_err(js_err)?;
+        }
+        Ok(())
     }
 
     /// The parameters in force.
     pub fn params(&self) -> Result<JsValue, JsError> {
-        to_js(self.tracker.params())
+        to_js(self.ropes.first().params())
     }
 
-    /// Replaces the HSV range: `{ lower: [h, s, v], upper: [h, s, v] }`,
-    /// OpenCV convention. A value outside 0..=255 is refused, never wrapped.
+    /// Replaces the (first rope's) HSV range: `{ lower: [h, s, v], upper:
+    /// [h, s, v] }`, OpenCV convention. A value outside 0..=255 is
+    /// refused, never wrapped.
     #[wasm_bindgen(js_name = setHsv)]
     pub fn set_hsv(&mut self, range: JsValue) -> Result<(), JsError> {
         let range: HsvRange = serde_wasm_bindgen::from_value(range).map_err(js_err)?;
-        self.tracker.set_hsv(range).map_err(js_err)
+        self.ropes.first_mut().set_hsv(range).map_err(js_err)
     }
 
     /// What the user knows of the rope, as `dlo.json`'s `rope`
@@ -264,7 +323,8 @@ impl WasmTracker {
     #[wasm_bindgen(js_name = setRopePrior)]
     pub fn set_rope_prior(&mut self, rope: JsValue) -> Result<(), JsError> {
         let rope: Option<RopeConfig> = serde_wasm_bindgen::from_value(rope).map_err(js_err)?;
-        self.tracker
+        self.ropes
+            .first_mut()
             .set_rope_prior(rope.unwrap_or_default().prior())
             .map_err(js_err)
     }
@@ -274,7 +334,20 @@ impl WasmTracker {
     /// `restore(null)` to initialise again at the next frame.
     #[wasm_bindgen(js_name = setRopeHint)]
     pub fn set_rope_hint(&mut self, u: f64, v: f64) {
-        self.tracker.set_rope_hint(Some([u, v]));
+        self.ropes.first_mut().set_rope_hint(Some([u, v]));
+    }
+
+    /// [`WasmTracker::set_rope_hint`] for rope `k` of several (a `k` past
+    /// the last rope is refused).
+    #[wasm_bindgen(js_name = setRopeHintOf)]
+    pub fn set_rope_hint_of(&mut self, k: usize, u: f64, v: f64) -> Result<(), JsError> {
+        let count = self.rope_count();
+        let rope = self
+            .ropes
+            .rope_mut(k)
+            .ok_or_else(|| JsError::new(&format!("setRopeHintOf: rope {k} of {count}")))?;
+        rope.set_rope_hint(Some([u, v]));
+        Ok(())
     }
 
     /// The camera moved since the last frame (a robot arm's kinematics, an
@@ -290,28 +363,49 @@ impl WasmTracker {
             )));
         };
         let rigid = upetrack::motion::RigidMotion::from_rows(m);
-        self.tracker.move_camera(&rigid).map_err(js_err)
+        for t in self.ropes.ropes_mut() {
+            t.move_camera(&rigid).map_err(js_err)?;
+        }
+        Ok(())
     }
 
-    /// The state after the last frame, to return to it with `restore`.
+    /// The state after the last frame, to return to it with `restore`:
+    /// the rope's snapshot, or with several ropes an array of them.
     pub fn snapshot(&self) -> Result<JsValue, JsError> {
-        to_js(&self.tracker.snapshot())
+        match self.ropes.ropes() {
+            [only] => to_js(&only.snapshot()),
+            ropes => to_js(&ropes.iter().map(Tracker::snapshot).collect::<Vec<_>>()),
+        }
     }
 
     /// Goes back to a state from `snapshot` (`null`: the initial state).
     pub fn restore(&mut self, snapshot: JsValue) -> Result<(), JsError> {
         if snapshot.is_null() || snapshot.is_undefined() {
-            self.tracker.reset();
+            self.ropes.reset();
             return Ok(());
         }
-        let s: upetrack::tracker::TrackerSnapshot =
-            serde_wasm_bindgen::from_value(snapshot).map_err(js_err)?;
-        self.tracker.restore(s).map_err(js_err)
+        type Snapshot = upetrack::tracker::TrackerSnapshot;
+        if self.rope_count() == 1 {
+            let s: Snapshot = serde_wasm_bindgen::from_value(snapshot).map_err(js_err)?;
+            return self.ropes.first_mut().restore(s).map_err(js_err);
+        }
+        let all: Vec<Snapshot> = serde_wasm_bindgen::from_value(snapshot).map_err(js_err)?;
+        if all.len() != self.rope_count() {
+            return Err(JsError::new(&format!(
+                "restore: a snapshot of {} ropes for a tracker of {}",
+                all.len(),
+                self.rope_count()
+            )));
+        }
+        for (t, s) in self.ropes.ropes_mut().iter_mut().zip(all) {
+            t.restore(s).map_err(js_err)?;
+        }
+        Ok(())
     }
 
     /// Forgets the state; the next frame initialises.
     pub fn reset(&mut self) {
-        self.tracker.reset();
+        self.ropes.reset();
     }
 
     /// Tracks one frame. `rgb` is RGB8, `depth` 16-bit units, `occlusions`
@@ -328,16 +422,15 @@ impl WasmTracker {
     ) -> Result<FrameResult, JsError> {
         let frame = Frame::new(width, height, rgb, depth, depth_scale).map_err(js_err)?;
         let rects = rects_of(occlusions)?;
-        let timed = run_frame(&mut self.tracker, &frame, &rects, &mut now_ms).map_err(js_err)?;
+        if self.rope_count() > 1 {
+            return self.track_several(&frame, &rects);
+        }
+        let timed =
+            run_frame(self.ropes.first_mut(), &frame, &rects, &mut now_ms).map_err(js_err)?;
         let record = frame_record(0, &timed);
         let (obs, out) = (timed.observation, timed.output);
-        let nodes_px = project_all(self.tracker.camera(), &out.nodes);
-        let (status, reason) = match &out.status {
-            FrameStatus::Initialised => ("initialised", None),
-            FrameStatus::Tracked => ("tracked", None),
-            FrameStatus::Recovered => ("recovered", None),
-            FrameStatus::Lost(r) => ("lost", Some(r.to_string())),
-        };
+        let nodes_px = project_all(self.ropes.first().camera(), &out.nodes);
+        let (status, reason) = status_of(&out);
         let result = FrameResult {
             nodes: out.nodes.iter().flat_map(|p| [p.x, p.y, p.z]).collect(),
             nodes_px,
@@ -351,9 +444,10 @@ impl WasmTracker {
             cloud_points: obs.cloud.len() as u32,
             init: out.init.clone(),
             record,
+            ropes: Vec::new(),
         };
         self.last_obs = Some(obs);
-        self.last = Some(out);
+        self.last = vec![out];
         Ok(result)
     }
 
@@ -376,25 +470,36 @@ impl WasmTracker {
         )
     }
 
-    /// The last frame's mask, one byte per pixel (1 rope).
+    /// The last frame's mask, one byte per pixel (1 rope; with several,
+    /// every rope's colour).
     #[wasm_bindgen(js_name = lastMask)]
     pub fn last_mask(&self) -> Vec<u8> {
+        if let Some(union) = &self.last_masks {
+            return union.clone();
+        }
         self.last_obs
             .as_ref()
             .map_or_else(Vec::new, |o| o.mask.data.iter().map(|&b| b as u8).collect())
     }
 
-    /// Frame error of the last frame against ground truth (flat metres):
-    /// `[mm, px]`, or an empty array when there is nothing to compare.
+    /// Frame error of the last frame (the first rope's) against ground
+    /// truth (flat metres): `[mm, px]`, or an empty array when there is
+    /// nothing to compare.
     #[wasm_bindgen(js_name = lastError)]
     pub fn last_error(&self, truth: &[f64]) -> Vec<f64> {
-        let Some(out) = &self.last else {
+        self.last_error_of(0, truth)
+    }
+
+    /// [`WasmTracker::last_error`] of rope `k`.
+    #[wasm_bindgen(js_name = lastErrorOf)]
+    pub fn last_error_of(&self, k: usize, truth: &[f64]) -> Vec<f64> {
+        let Some(out) = self.last.get(k) else {
             return Vec::new();
         };
         let gt = points_of(truth);
         match (
             frame_error(&out.nodes, &gt),
-            frame_error_px(&out.nodes, &gt, self.tracker.camera()),
+            frame_error_px(&out.nodes, &gt, self.ropes.first().camera()),
         ) {
             (Some(mm), Some(px)) => vec![mm * 1000.0, px],
             _ => Vec::new(),
@@ -539,6 +644,9 @@ struct SequenceInfo {
     depth_files: Vec<String>,
     /// Flat metres per frame, or null.
     groundtruth: Vec<Option<Vec<f64>>>,
+    /// With several ropes (`dlo.json`'s `ropes`), each one's `{name, hsv,
+    /// rope, groundtruth}`; empty for one rope.
+    ropes: Vec<RopeInfo>,
 }
 
 /// Reads a sequence's metadata. `json` maps file names (`camera_intrinsic.json`,
@@ -564,7 +672,6 @@ pub fn read_sequence_info(
     let seq = Sequence::open(source).map_err(js_err)?;
     sequence_info(&seq)
 }
-
 /// The page's view of an opened sequence (a folder's or a recording's).
 fn sequence_info<S: Source>(seq: &Sequence<S>) -> Result<JsValue, JsError> {
     let info = SequenceInfo {
@@ -576,14 +683,12 @@ fn sequence_info<S: Source>(seq: &Sequence<S>) -> Result<JsValue, JsError> {
         rope: seq.config.rope,
         color_files: seq.color_files.clone(),
         depth_files: seq.depth_files.clone(),
-        groundtruth: seq
-            .groundtruth
-            .iter()
-            .map(|g| {
-                g.as_ref()
-                    .map(|pts| pts.iter().flat_map(|p| [p.x, p.y, p.z]).collect())
-            })
-            .collect(),
+        groundtruth: flat_truth(&seq.groundtruth),
+        ropes: if seq.ropes.len() > 1 {
+            seq.ropes.iter().map(RopeInfo::of).collect()
+        } else {
+            Vec::new()
+        },
     };
     info.serialize(&serde_wasm_bindgen::Serializer::json_compatible())
         .map_err(js_err)

@@ -1,13 +1,14 @@
 //! Several ropes in one frame: which rope each segmented pixel belongs to.
 //!
 //! The ropes compete for pixels as the components of one mixture over all
-//! their nodes would, in its hard limit: a pixel that the colour ranges of
-//! several ropes accept goes to the tracked rope whose surface passes
-//! nearest the pixel's point in 3D (so depth tells the rope lying over a
-//! crossing from the one under it), if that is within reach of it. What no
-//! tracked rope is near is left to every rope whose colour it has: a rope
-//! not yet found is initialised from it, a tracked one treats it as it
-//! treats clutter. A pixel only one rope's colour accepts is that rope's.
+//! their nodes would, in its hard limit: a pixel goes to the tracked rope
+//! whose surface passes nearest the pixel's point in 3D (so depth tells
+//! the rope lying over a crossing from the one under it), if that is
+//! within reach of it, and is of use to that rope if its colour range
+//! accepts it (a rope's pixel that its own range misses is not another
+//! rope's for that). What no tracked rope is near is left to every rope
+//! whose colour it has: a rope not yet found is initialised from it, a
+//! tracked one treats it as it treats clutter.
 
 use alloc::vec;
 use alloc::vec::Vec;
@@ -42,7 +43,7 @@ pub struct PixelShare {
 /// Who a pixel of some rope's colour belongs to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Owner {
-    /// Rope `k`'s alone.
+    /// Rope `k`'s alone (of use to it if its colour accepts the pixel).
     Rope(usize),
     /// Every rope whose colour it has.
     Shared,
@@ -94,28 +95,25 @@ pub fn share_pixels(
         })
         .collect();
     for (i, &bits) in colours.iter().enumerate().filter(|(_, b)| **b != 0) {
-        let owner = if bits.is_power_of_two() {
-            // One colour: that rope's, whatever lies near.
-            Owner::Rope(bits.trailing_zeros() as usize)
-        } else {
-            let (u, v) = ((i % w as usize) as f64, (i / w as usize) as f64);
-            owner_among(
-                bits,
-                u,
-                v,
-                frame.depth[i],
-                frame,
-                camera,
-                (lines, &axes, &mut starts),
-                &windows,
-                reach,
-            )
-        };
+        let (u, v) = ((i % w as usize) as f64, (i / w as usize) as f64);
+        let owner = owner_of(
+            bits,
+            u,
+            v,
+            frame.depth[i],
+            frame,
+            camera,
+            (lines, &axes, &mut starts),
+            &windows,
+            reach,
+        );
         for (k, share) in shares.iter_mut().enumerate() {
+            let of_colour = bits & (1 << k) != 0;
             match owner {
-                Owner::Rope(j) if j == k => share.own.data[i] = true,
+                // The nearest rope's, if it has its colour (else nobody's).
+                Owner::Rope(j) if j == k => share.own.data[i] = of_colour,
                 Owner::Rope(_) => share.others.data[i] = true,
-                Owner::Shared => share.own.data[i] = bits & (1 << k) != 0,
+                Owner::Shared => share.own.data[i] = of_colour,
             }
         }
     }
@@ -123,9 +121,12 @@ pub fn share_pixels(
 }
 
 /// The owner of a pixel `(u, v)` (raw depth `raw`) that the colours of the
-/// ropes in `bits` accept.
+/// ropes in `bits` accept: the tracked rope whose surface is nearest its
+/// point, of whatever colour (a rope's pixel that its own colour range
+/// misses is still not another rope's), if within reach; else the one
+/// rope of its colour, or every one.
 #[allow(clippy::too_many_arguments)]
-fn owner_among(
+fn owner_of(
     bits: u8,
     u: f64,
     v: f64,
@@ -136,22 +137,26 @@ fn owner_among(
     windows: &[Option<Window>],
     reach: f64,
 ) -> Owner {
-    let near = |k: usize| bits & (1 << k) != 0 && windows[k].is_some_and(|win| win.contains(u, v));
-    let mut tracked = (0..windows.len()).filter(|&k| near(k));
-    let (Some(first), second) = (tracked.next(), tracked.next()) else {
-        // Within reach of no tracked rope of its colour: everyone's.
-        return Owner::Shared;
+    let by_colour = if bits.is_power_of_two() {
+        Owner::Rope(bits.trailing_zeros() as usize)
+    } else {
+        Owner::Shared
     };
-    if second.is_none() {
-        // Of one tracked rope only: no other is near enough to want it.
-        return Owner::Rope(first);
+    let near = |k: &usize| windows[*k].as_ref().is_some_and(|win| win.contains(u, v));
+    let mut tracked = (0..windows.len()).filter(near);
+    match (tracked.next(), tracked.next()) {
+        // Within reach of no tracked rope.
+        (None, _) => return by_colour,
+        // Near one tracked rope only, of its colour: no other wants it.
+        (Some(k), None) if bits & (1 << k) != 0 => return Owner::Rope(k),
+        _ => {}
     }
     let point = (raw != 0).then(|| camera.deproject(u, v, raw as f64 * frame.depth_scale));
     let nearest = (0..windows.len())
-        .filter(|&k| near(k))
+        .filter(near)
         .filter_map(|k| {
             let line = lines.get(k).copied().flatten()?;
-            let d = match (point, windows[k]) {
+            let d = match (point, windows[k].as_ref()) {
                 (Some(p), _) => axes[k].as_ref()?.surface_distance_from(&p, &mut starts[k]),
                 (None, Some(win)) => win.distance_in_image(Vec2::new(u, v), &line, camera),
                 (None, None) => return None,
@@ -161,7 +166,7 @@ fn owner_among(
         .min_by(|a, b| a.1.total_cmp(&b.1));
     match nearest {
         Some((k, d)) if d <= reach => Owner::Rope(k),
-        _ => Owner::Shared,
+        _ => by_colour,
     }
 }
 
@@ -242,10 +247,13 @@ impl Axis {
 
 /// The pixels within reach of a tracked rope: its projected nodes' box,
 /// widened by the reach at its nearest node.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 struct Window {
     min: Vec2,
     max: Vec2,
+    /// Each projected segment's box, widened as the whole: a long rope's
+    /// box holds much that is far from it.
+    pieces: Vec<(Vec2, Vec2)>,
     /// Metres per pixel at the rope's nearest node.
     metres_per_px: f64,
 }
@@ -262,21 +270,36 @@ impl Window {
             return None;
         }
         let focal = camera.fx.max(camera.fy);
-        let margin = (reach + line.radius) * focal / nearest + 1.0;
-        let (mut min, mut max) = (Vec2::repeat(f64::INFINITY), Vec2::repeat(f64::NEG_INFINITY));
-        for q in line.nodes.iter().filter_map(|p| camera.project(p)) {
-            min = min.inf(&q);
-            max = max.sup(&q);
-        }
+        let margin = Vec2::repeat((reach + line.radius) * focal / nearest + 1.0);
+        let projected: Vec<Vec2> = line
+            .nodes
+            .iter()
+            .filter_map(|p| camera.project(p))
+            .collect();
+        let pieces: Vec<(Vec2, Vec2)> = match projected.as_slice() {
+            [only] => alloc::vec![(only - margin, only + margin)],
+            many => many
+                .windows(2)
+                .map(|s| (s[0].inf(&s[1]) - margin, s[0].sup(&s[1]) + margin))
+                .collect(),
+        };
+        let min = pieces
+            .iter()
+            .fold(Vec2::repeat(f64::INFINITY), |m, p| m.inf(&p.0));
+        let max = pieces
+            .iter()
+            .fold(Vec2::repeat(f64::NEG_INFINITY), |m, p| m.sup(&p.1));
         (min.x <= max.x).then(|| Self {
-            min: min - Vec2::repeat(margin),
-            max: max + Vec2::repeat(margin),
+            min,
+            max,
+            pieces,
             metres_per_px: nearest / focal,
         })
     }
 
     fn contains(&self, u: f64, v: f64) -> bool {
-        u >= self.min.x && u <= self.max.x && v >= self.min.y && v <= self.max.y
+        let within = |(lo, hi): &(Vec2, Vec2)| u >= lo.x && u <= hi.x && v >= lo.y && v <= hi.y;
+        within(&(self.min, self.max)) && self.pieces.iter().any(within)
     }
 
     /// For a pixel without depth: its distance in the image to the rope's
@@ -510,8 +533,17 @@ mod tests {
         assert!(!shares[0].others.get(bu, bv));
     }
 
+    /// Pixels set in `a` and not in `b`.
+    fn outside(a: &Mask, b: &Mask) -> usize {
+        a.data
+            .iter()
+            .zip(&b.data)
+            .filter(|(x, y)| **x && !**y)
+            .count()
+    }
+
     #[test]
-    fn a_pixel_of_one_colour_is_that_ropes_whatever_lies_near() {
+    fn a_pixel_goes_to_the_nearest_rope_and_serves_it_only_in_its_colour() {
         let r = 0.003;
         let a = segment(
             Vec3::new(-0.1, -0.005, 0.597),
@@ -525,16 +557,12 @@ mod tests {
         );
         let both = Scene::new(&[(&a, r), (&b, r)]);
         let frame = both.frame();
-        // Two colours: rope `a` is the left half of the pixels' colour,
-        // rope `b` the right half, whichever rope lies there.
-        let mut left = both.mask.clone();
-        let mut right = both.mask.clone();
-        for (i, (l, r)) in left.data.iter_mut().zip(&mut right.data).enumerate() {
-            if (i % W as usize) < (W / 2) as usize {
-                *r = false;
-            } else {
-                *l = false;
-            }
+        // Rope `a`'s colour range takes every rope pixel (a range picked
+        // wide), rope `b`'s only those of the right half (picked narrow).
+        let wide = both.mask.clone();
+        let mut narrow = both.mask.clone();
+        for (i, p) in narrow.data.iter_mut().enumerate() {
+            *p &= (i % W as usize) >= (W / 2) as usize;
         }
         let lines = [
             Some(RopeLine {
@@ -546,10 +574,46 @@ mod tests {
                 radius: r,
             }),
         ];
-        let shares = share_pixels(&frame, &camera(), &[&left, &right], &lines, 0.04);
-        assert_eq!(shares[0].own, left);
-        assert_eq!(shares[1].own, right);
-        assert_eq!(shares[0].others, right);
+        let shares = share_pixels(&frame, &camera(), &[&wide, &narrow], &lines, 0.04);
+        // `b`'s pixels of the left half, which only `a`'s range accepts,
+        // are still not `a`'s: `a` keeps its own side only.
+        assert_eq!(misassigned(&both, &shares[0].own, &a, &b), 0);
+        assert_eq!(misassigned(&both, &shares[1].own, &b, &a), 0);
+        assert_eq!(
+            outside(&shares[1].own, &narrow),
+            0,
+            "b uses its colour only"
+        );
+        assert!(shares[0].own.count() * 10 > both.mask.count() * 4);
+        assert!(shares[1].own.count() * 10 > both.mask.count() * 2);
+        // Ropes of colours that never meet keep their whole colour masks.
+        let far = segment(
+            Vec3::new(-0.1, 0.05, 0.597),
+            Vec3::new(0.1, 0.05, 0.597),
+            12,
+        );
+        let (scene_a, scene_far) = (Scene::new(&[(&a, r)]), Scene::new(&[(&far, r)]));
+        let apart = Scene::new(&[(&a, r), (&far, r)]);
+        let lines = [
+            Some(RopeLine {
+                nodes: &a,
+                radius: r,
+            }),
+            Some(RopeLine {
+                nodes: &far,
+                radius: r,
+            }),
+        ];
+        let frame = apart.frame();
+        let shares = share_pixels(
+            &frame,
+            &camera(),
+            &[&scene_a.mask, &scene_far.mask],
+            &lines,
+            0.04,
+        );
+        assert_eq!(shares[0].own, scene_a.mask);
+        assert_eq!(shares[1].own, scene_far.mask);
     }
 
     #[test]

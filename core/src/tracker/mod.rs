@@ -15,7 +15,7 @@ use crate::perception::evidence::Evidence;
 use crate::perception::frame::{Frame, FrameError};
 use crate::perception::initialisation::{
     initialise, one_rope_thick, InitError, InitGuide, InitReport, Initialisation, PriorError,
-    RopePrior, TakenRope, DIAMETER_PRIOR_FACTOR,
+    RopePrior, DIAMETER_PRIOR_FACTOR,
 };
 use crate::perception::point_cloud::build_cloud;
 use crate::perception::segmentation::{
@@ -30,10 +30,12 @@ use crate::upe::UpeTrackStep;
 use crate::visibility::{classify_nodes, visible_nodes_relative, NodeVisibility};
 
 mod camera;
+mod recovery;
 mod several;
 mod stepper;
 use camera::CameraFollowing;
-pub use several::{MultiTracker, MAX_ROPES};
+pub use recovery::RecoveryBackoff;
+pub use several::{MultiTracker, OtherRopes, MAX_ROPES};
 pub use stepper::{StepReports, Stepper};
 
 /// A tracked rope longer than this multiple of its length at
@@ -188,19 +190,6 @@ pub struct Observation {
     pub others: Option<OtherRopes>,
 }
 
-/// What the other ropes tracked in the same frame leave a rope.
-#[derive(Debug, Clone)]
-pub struct OtherRopes {
-    /// Their pixels: they hide this rope as an occluder does.
-    pub pixels: Mask,
-    /// Every pixel of this rope's colour, theirs included: initialisation
-    /// looks for this rope among all the candidates of its colour (so a
-    /// crossing with another rope is walked straight through)...
-    pub colour: Mask,
-    /// ...and leaves the candidates lying along these ropes to them.
-    pub taken: Vec<TakenRope>,
-}
-
 impl Observation {
     /// An observation from [`Tracker::segment`]'s mask and
     /// [`Tracker::cloud`]'s cloud of it.
@@ -249,43 +238,6 @@ pub struct TrackerSnapshot {
     #[cfg_attr(feature = "serde", serde(default))]
     recovery: RecoveryBackoff,
     stepper: Stepper,
-}
-
-/// How often a state that contradicts the images is re-initialised: after
-/// the `k`-th recovery in a row, the next waits `2^k - 1` frames (at most
-/// [`MAX_RECOVERY_WAIT`]); a step that agrees with the images ends the row.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct RecoveryBackoff {
-    /// Recoveries since the last step that agreed with the images.
-    in_a_row: u32,
-    /// Frames still to wait before the next recovery.
-    wait: u32,
-}
-
-impl RecoveryBackoff {
-    /// `true` when a recovery may run on this frame; else one frame of the
-    /// wait passes.
-    fn may_recover(&mut self) -> bool {
-        if self.wait == 0 {
-            return true;
-        }
-        self.wait -= 1;
-        false
-    }
-
-    /// A recovery ran (taken or not): the next one waits longer.
-    fn recovered(&mut self) {
-        self.in_a_row = self.in_a_row.saturating_add(1);
-        self.wait = 1u32
-            .checked_shl(self.in_a_row)
-            .map_or(MAX_RECOVERY_WAIT, |w| (w - 1).min(MAX_RECOVERY_WAIT));
-    }
-
-    /// A step agreed with the images: recoveries run at once again.
-    fn agreed(&mut self) {
-        *self = Self::default();
-    }
 }
 
 /// Tracks one rope across the frames of one camera.
@@ -975,30 +927,6 @@ impl Tracker {
 mod tests {
     use super::*;
 
-    /// Recoveries in a row wait 1, 3, 7, ... frames between them, never more than
-    /// [`MAX_RECOVERY_WAIT`]; a step that agrees with the images ends the row.
-    #[test]
-    fn recoveries_in_a_row_back_off_exponentially_up_to_the_cap() {
-        let mut b = RecoveryBackoff::default();
-        let mut ran = Vec::new();
-        for frame in 0..200 {
-            if b.may_recover() {
-                ran.push(frame);
-                b.recovered();
-            }
-        }
-        assert_eq!(ran[..7], [0, 2, 6, 14, 30, 62, 126]);
-        let gaps: Vec<u32> = ran.windows(2).map(|w| w[1] - w[0]).collect();
-        assert!(gaps.iter().all(|&g| g <= MAX_RECOVERY_WAIT + 1), "{gaps:?}");
-        assert_eq!(gaps.last(), Some(&(MAX_RECOVERY_WAIT + 1)));
-        b.agreed();
-        assert!(b.may_recover());
-        for _ in 0..100 {
-            b.recovered();
-        }
-        assert_eq!(b.wait, MAX_RECOVERY_WAIT);
-    }
-
     /// A tracker with `params` whose state is a straight rope of
     /// `params.node_count` nodes 1 cm apart, 0.6 m away; and those nodes.
     fn tracking_a_line(params: Params) -> (Tracker, Vec<Vec3>) {
@@ -1014,6 +942,8 @@ mod tests {
         (t, nodes)
     }
 
+    /// Recoveries in a row wait 1, 3, 7, ... frames between them, never more than
+    /// [`MAX_RECOVERY_WAIT`]; a step that agrees with the images ends the row.
     #[test]
     fn a_camera_motion_carries_the_state_and_a_non_rigid_one_is_refused() {
         let (mut t, nodes) = tracking_a_line(Params::default());

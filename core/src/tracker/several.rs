@@ -4,12 +4,25 @@
 
 use alloc::vec::Vec;
 
-use super::{FrameOutput, Observation, OtherRopes, Tracker, TrackerError, UNEXPLAINED_REACH};
+use super::{FrameOutput, Observation, Tracker, TrackerError, UNEXPLAINED_REACH};
 use crate::math::Vec2;
 use crate::perception::frame::Frame;
 use crate::perception::initialisation::TakenRope;
 use crate::perception::segmentation::{Mask, Rect};
 use crate::perception::sharing::{share_pixels, PixelShare, RopeLine, MAX_SHARED};
+
+/// What the other ropes tracked in the same frame leave a rope.
+#[derive(Debug, Clone)]
+pub struct OtherRopes {
+    /// Their pixels: they hide this rope as an occluder does.
+    pub pixels: Mask,
+    /// Every pixel of this rope's colour, theirs included: initialisation
+    /// looks for this rope among all the candidates of its colour (so a
+    /// crossing with another rope is walked straight through)...
+    pub colour: Mask,
+    /// ...and leaves the candidates lying along these ropes to them.
+    pub taken: Vec<TakenRope>,
+}
 
 /// Most ropes one [`MultiTracker`] follows: as many as pixels are shared
 /// between ([`MAX_SHARED`]).
@@ -53,6 +66,42 @@ impl MultiTracker {
     /// Rope `k`'s tracker (to set a hint or a prior), if there is one.
     pub fn rope_mut(&mut self, k: usize) -> Option<&mut Tracker> {
         self.ropes.get_mut(k)
+    }
+
+    /// The first rope's tracker (there is always one).
+    pub fn first(&self) -> &Tracker {
+        &self.ropes[0]
+    }
+
+    /// The first rope's tracker, to change.
+    pub fn first_mut(&mut self) -> &mut Tracker {
+        &mut self.ropes[0]
+    }
+
+    /// Every rope's tracker, to change (parameters, the camera's motion).
+    pub fn ropes_mut(&mut self) -> &mut [Tracker] {
+        &mut self.ropes
+    }
+
+    /// Rope `k`'s observation of `frame` as its next update would see it
+    /// (its share of the pixels beside the ropes as they stand), to
+    /// explain that update; `None` when there is no rope `k`.
+    pub fn observe_rope(
+        &self,
+        k: usize,
+        frame: &Frame<'_>,
+        occlusions: &[Rect],
+    ) -> Result<Option<Observation>, TrackerError> {
+        if k >= self.ropes.len() {
+            return Ok(None);
+        }
+        if self.ropes.len() == 1 {
+            return self.ropes[k].observe(frame, occlusions).map(Some);
+        }
+        let masks = self.segment(frame, occlusions)?;
+        let refs: Vec<&Mask> = masks.iter().collect();
+        let share = self.share(frame, &refs).swap_remove(k);
+        Ok(Some(self.observation(k, frame, share, refs[k], occlusions)))
     }
 
     /// Forgets every rope's state.
