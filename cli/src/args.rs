@@ -293,6 +293,10 @@ pub struct CompareArgs {
     /// With --random: the range's first N seeds.
     #[arg(long, requires = "random")]
     pub count: Option<u64>,
+    /// Run on the scenes of several ropes instead: each rope beside the
+    /// others against the same rope alone, and the identity swaps.
+    #[arg(long, conflicts_with = "random")]
+    pub several: bool,
     /// Replace the text between the comparison markers of this page.
     #[arg(long, value_name = "page.md")]
     pub update: Option<PathBuf>,

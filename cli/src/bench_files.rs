@@ -17,7 +17,9 @@ pub(crate) fn ensure_written(
     write: impl FnOnce(&Path) -> Result<(), CliError>,
 ) -> Result<(), CliError> {
     let cached = std::fs::read_to_string(dir.join(FINGERPRINT_FILE)).ok();
-    if dir.join("groundtruth.json").is_file() && cached.as_deref() == Some(print) {
+    // The fingerprint is written last, and the folder renamed into place
+    // only after it: a folder with it is complete.
+    if dir.join("dlo.json").is_file() && cached.as_deref() == Some(print) {
         return Ok(());
     }
     if dir.exists() {

@@ -11,6 +11,7 @@ mod pipeline;
 mod progress;
 mod random_bench;
 mod recording;
+mod several_bench;
 mod synth;
 
 use std::path::Path;

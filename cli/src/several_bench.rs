@@ -1,0 +1,198 @@
+//! `upetrack compare --several`: the simulator's scenes of several ropes,
+//! each rope tracked beside the others against the same rope tracked alone
+//! (in the same scene made without the others, and in the same images with
+//! the others ignored), with the identity swaps and the step's cost.
+
+use std::path::{Path, PathBuf};
+
+use indicatif::ProgressBar;
+use upetrack::{Algorithm, Params};
+use upetrack_io::eval::{quantile, summarise_ropes, Summary};
+use upetrack_io::result::TrackResult;
+use upetrack_synth::{SeveralKind, SeveralRopes, SIMULATOR_VERSION};
+
+use crate::args::CompareArgs;
+use crate::bench_files::{ensure_written, update_between};
+use crate::{fmt, open_sequence, pipeline, progress, with_algorithm, AnySequence, CliError};
+
+/// Lines of a page between which `--update` writes the table.
+const BEGIN_MARKER: &str = "<!-- several:begin -->";
+const END_MARKER: &str = "<!-- several:end -->";
+
+/// Frames of every scene when `--frames` is absent.
+const DEFAULT_SEVERAL_FRAMES: usize = 90;
+
+/// The seed of every scene.
+const SEED: u64 = 1;
+
+/// One rope of one scene tracked by one algorithm.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct SeveralRow {
+    /// Scene name.
+    pub scene: String,
+    /// Rope name.
+    pub rope: String,
+    /// Algorithm name.
+    pub algorithm: String,
+    /// Mean frame error beside the other ropes, mm.
+    pub mean_mm: f64,
+    /// Largest frame error beside the other ropes, mm.
+    pub max_mm: f64,
+    /// Mean frame error of the same scene made with this rope alone, mm.
+    pub alone_scene_mm: f64,
+    /// Mean frame error in the same images, the other ropes not tracked, mm.
+    pub alone_images_mm: f64,
+    /// Identity swaps of the scene (every rope of it).
+    pub identity_swaps: usize,
+    /// Median tracking step of all the scene's ropes together, ms.
+    pub step_ms: f64,
+    /// Median whole frame (segmentation, sharing, clouds, steps), ms.
+    pub frame_ms: f64,
+}
+
+/// A scene's folder in `data`: `variant` is "" for the whole scene,
+/// `-only<k>` for rope `k` alone.
+fn scene_dir(data: &Path, kind: SeveralKind, variant: &str, frames: usize) -> PathBuf {
+    data.join(format!("several-{}{variant}-{frames}f", kind.name()))
+}
+
+/// Writes the scene (or rope `only` alone) into `dir` unless it is there.
+fn ensure_scene(
+    dir: &Path,
+    kind: SeveralKind,
+    only: Option<usize>,
+    frames: usize,
+) -> Result<(), CliError> {
+    let print = format!(
+        "simulator {SIMULATOR_VERSION}, {} only {only:?}, {frames} frames, seed {SEED}\n",
+        kind.name()
+    );
+    ensure_written(dir, &print, |partial| {
+        let scene = match only {
+            Some(k) => SeveralRopes::only(kind, frames, SEED, k)
+                .ok_or_else(|| CliError::input(format!("{}: no rope {k}", kind.name())))?,
+            None => SeveralRopes::new(kind, frames, SEED),
+        };
+        upetrack_io::synthetic_several::write_several(
+            scene,
+            false,
+            upetrack_io::write::JPEG_QUALITY,
+            &mut |(path, bytes)| upetrack_io::write::write_file(&partial.join(path), &bytes),
+        )?;
+        Ok(())
+    })
+}
+
+/// `seq` with only rope `k`: its colour, prior and ground truth.
+fn with_one_rope(mut seq: AnySequence, k: usize) -> Option<AnySequence> {
+    let rope = seq.ropes.get(k)?.clone();
+    seq.hsv = rope.hsv;
+    seq.groundtruth = rope.groundtruth.clone();
+    seq.groundtruth_occluded = rope.groundtruth_occluded.clone();
+    seq.ropes = vec![rope];
+    Some(seq)
+}
+
+/// The mean error of `seq` tracked with `params` (its one rope, or all).
+fn track(
+    seq: &AnySequence,
+    name: &str,
+    params: Params,
+) -> Result<(Vec<Summary>, TrackResult), CliError> {
+    let result = pipeline::track(seq, params, &ProgressBar::hidden())?;
+    Ok((summarise_ropes(name, &result, seq), result))
+}
+
+fn open(dir: &Path) -> Result<AnySequence, CliError> {
+    open_sequence(&dir.to_string_lossy(), &crate::RecordingArgs::default())
+}
+
+/// `upetrack compare --several [--frames N] [--data <dir>] [--algorithm A,B]
+/// [--params <params.json>] [--json ..] [--markdown ..] [--update <page.md>]`.
+pub fn run(args: &CompareArgs, params: Params, algorithms: &[Algorithm]) -> Result<(), CliError> {
+    let frames = args.frames.map_or(DEFAULT_SEVERAL_FRAMES, |n| n as usize);
+    let data = args.data.as_path();
+    let kinds = SeveralKind::ALL;
+    let bar = progress::bar(kinds.len() as u64, "scenes", "scenes of several ropes");
+    let mut rows = Vec::new();
+    for kind in kinds {
+        let dir = scene_dir(data, kind, "", frames);
+        ensure_scene(&dir, kind, None, frames)?;
+        let seq = open(&dir)?;
+        for &a in algorithms {
+            let p = with_algorithm(params, a);
+            let (summaries, result) = track(&seq, kind.name(), p)?;
+            let swaps = summaries.last().map_or(0, |s| s.identity_swaps);
+            let steps: Vec<f64> = result.frames.iter().map(|f| f.track_ms).collect();
+            let whole: Vec<f64> = result.frames.iter().map(|f| f.total_ms).collect();
+            for (k, rope) in seq.ropes.iter().enumerate() {
+                let alone_dir = scene_dir(data, kind, &format!("-only{k}"), frames);
+                ensure_scene(&alone_dir, kind, Some(k), frames)?;
+                let (alone, _) = track(&open(&alone_dir)?, kind.name(), p)?;
+                let same = with_one_rope(open(&dir)?, k)
+                    .ok_or_else(|| CliError::input(format!("{}: no rope {k}", kind.name())))?;
+                let (same, _) = track(&same, kind.name(), p)?;
+                let mine = summaries.get(k).ok_or_else(|| {
+                    CliError::input(format!("{}: no row for rope {k}", kind.name()))
+                })?;
+                let mean_of = |s: &[Summary]| s.first().map_or(f64::NAN, |s| s.mm.mean);
+                rows.push(SeveralRow {
+                    scene: kind.name().to_string(),
+                    rope: rope.name.clone(),
+                    algorithm: a.name().to_string(),
+                    mean_mm: mine.mm.mean,
+                    max_mm: mine.max_mm,
+                    alone_scene_mm: mean_of(&alone),
+                    alone_images_mm: mean_of(&same),
+                    identity_swaps: swaps,
+                    step_ms: quantile(&steps, 0.5),
+                    frame_ms: quantile(&whole, 0.5),
+                });
+            }
+        }
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let text = markdown(&rows, frames);
+    println!("{text}");
+    if let Some(p) = &args.outputs.json {
+        upetrack_io::write::write_json(p, &rows)?;
+    }
+    if let Some(p) = &args.outputs.markdown {
+        upetrack_io::write::write_file(p, text.as_bytes())?;
+    }
+    if let Some(p) = &args.update {
+        update_between(p, &text, BEGIN_MARKER, END_MARKER)?;
+    }
+    Ok(())
+}
+
+/// The table of `rows`.
+fn markdown(rows: &[SeveralRow], frames: usize) -> String {
+    let mut s = format!(
+        "Scenes of {frames} frames (seed {SEED}; `upetrack synth <scene>`). Mean and max frame error of each rope \
+         tracked beside the others; its mean error alone in the same scene made without the others (`--only K`) \
+         and in the same images with the others not tracked, and the ratios; the scene's identity swaps; the \
+         median step of all its ropes and the median whole frame.\n\n\
+         | scene | rope | algorithm | mean mm | max mm | alone (scene) mm | ratio | alone (images) mm | ratio | swaps | step ms | frame ms |\n\
+         |---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
+    );
+    for r in rows {
+        s += &format!(
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            r.scene,
+            r.rope,
+            r.algorithm,
+            fmt(r.mean_mm, 2),
+            fmt(r.max_mm, 1),
+            fmt(r.alone_scene_mm, 2),
+            fmt(r.mean_mm / r.alone_scene_mm, 2),
+            fmt(r.alone_images_mm, 2),
+            fmt(r.mean_mm / r.alone_images_mm, 2),
+            r.identity_swaps,
+            fmt(r.step_ms, 3),
+            fmt(r.frame_ms, 3),
+        );
+    }
+    s
+}
