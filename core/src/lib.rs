@@ -23,6 +23,8 @@
 //! the stages; [`step`] is the interface every algorithm implements;
 //! [`params::Params`] composes the shared settings with each algorithm's
 //! own; [`validation`] is the one error type of a rejected parameter.
+//! Above it, [`several::MultiTracker`] tracks several ropes at once, one
+//! `Tracker` each, on the pixels [`perception::sharing`] shares out.
 //!
 //! **Where a new tracking algorithm goes, and what it implements.** A new
 //! algorithm is a folder (or a file) under `baselines/`, beside CPD and
@@ -55,6 +57,7 @@ pub mod params;
 pub mod perception;
 pub mod polyline;
 pub mod rng;
+pub mod several;
 pub mod step;
 pub mod tracker;
 pub mod upe;
@@ -66,5 +69,6 @@ pub use params::Params;
 pub use perception::camera::CameraIntrinsics;
 pub use perception::frame::Frame;
 pub use perception::segmentation::{HsvRange, Rect};
+pub use several::MultiTracker;
 pub use step::Algorithm;
-pub use tracker::{FrameOutput, FrameStatus, MultiTracker, Tracker};
+pub use tracker::{FrameOutput, FrameStatus, Tracker};

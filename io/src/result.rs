@@ -91,12 +91,12 @@ pub fn read_result(path: &std::path::Path) -> Result<TrackResult, crate::Sequenc
     let text = std::fs::read_to_string(path).map_err(|e| crate::write::io_err(path, e))?;
     let result: TrackResult =
         serde_json::from_str(&text).map_err(|e| crate::write::json_error(&name, e))?;
-    if result.ropes.len() > upetrack::tracker::MAX_ROPES {
+    if result.ropes.len() > upetrack::several::MAX_ROPES {
         return Err(crate::SequenceError::too_large(
             name,
             "number of ropes",
             result.ropes.len() as u64,
-            upetrack::tracker::MAX_ROPES as u64,
+            upetrack::several::MAX_ROPES as u64,
         ));
     }
     let every_frame = result

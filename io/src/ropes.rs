@@ -5,12 +5,84 @@
 use serde::{Deserialize, Serialize};
 use upetrack::math::Vec3;
 use upetrack::perception::initialisation::RopePrior;
-use upetrack::tracker::MAX_ROPES;
+use upetrack::several::MAX_ROPES;
 use upetrack::HsvRange;
 
 use crate::error::SequenceError;
-use crate::sequence::{read_groundtruth, DloConfig, RopeConfig, SegmentationConfig, Truth};
-use crate::source::{is_inside_name, Source};
+use crate::source::is_inside_name;
+
+/// HSV thresholds in `dlo.json`.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct SegmentationConfig {
+    /// `[h, s, v]` lower bounds.
+    pub hsv_lower: [u8; 3],
+    /// `[h, s, v]` upper bounds.
+    pub hsv_upper: [u8; 3],
+    /// Colour noise allowed for when the saturation is tested, in 8-bit
+    /// levels of chroma (`max - min` of a pixel's R, G, B); absent: 0,
+    /// OpenCV's `inRange` exactly ([`HsvRange::chroma_noise`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub chroma_noise: Option<u8>,
+}
+
+impl SegmentationConfig {
+    /// The `dlo.json` form of a range (`chroma_noise` left out when 0).
+    pub fn of(range: &HsvRange) -> Self {
+        Self {
+            hsv_lower: range.lower,
+            hsv_upper: range.upper,
+            chroma_noise: (range.chroma_noise > 0).then_some(range.chroma_noise),
+        }
+    }
+
+    /// The range it describes.
+    pub fn range(&self) -> HsvRange {
+        HsvRange {
+            lower: self.hsv_lower,
+            upper: self.hsv_upper,
+            chroma_noise: self.chroma_noise.unwrap_or(0),
+        }
+    }
+}
+
+/// What the user knows of the rope, in `dlo.json`'s `rope` (both optional).
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Default)]
+pub struct RopeConfig {
+    /// Length, metres.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub length_m: Option<f64>,
+    /// Diameter, metres.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub diameter_m: Option<f64>,
+}
+
+impl RopeConfig {
+    /// The core's prior.
+    pub fn prior(&self) -> RopePrior {
+        RopePrior {
+            length: self.length_m,
+            diameter: self.diameter_m,
+        }
+    }
+}
+
+/// One rope's ground truth as read: per frame index its points (when
+/// given) and whether part of it is hidden.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub(crate) struct Truth {
+    pub(crate) points: Vec<Option<Vec<Vec3>>>,
+    pub(crate) occluded: Vec<bool>,
+}
+
+impl Truth {
+    /// No ground truth for `frames` frames.
+    pub(crate) fn none(frames: usize) -> Self {
+        Self {
+            points: vec![None; frames],
+            occluded: vec![false; frames],
+        }
+    }
+}
 
 /// Longest rope name, bytes.
 pub const MAX_ROPE_NAME_BYTES: usize = 64;
@@ -56,16 +128,16 @@ impl SequenceRope {
 }
 
 /// Checks `config.ropes` (`path` names `dlo.json` in errors).
-pub(crate) fn check_ropes(config: &DloConfig, path: &str) -> Result<(), SequenceError> {
-    if config.ropes.len() > MAX_ROPES {
+pub(crate) fn check_ropes(ropes: &[RopeEntry], path: &str) -> Result<(), SequenceError> {
+    if ropes.len() > MAX_ROPES {
         return Err(SequenceError::too_large(
             path,
             "number of ropes",
-            config.ropes.len() as u64,
+            ropes.len() as u64,
             MAX_ROPES as u64,
         ));
     }
-    for (k, rope) in config.ropes.iter().enumerate() {
+    for (k, rope) in ropes.iter().enumerate() {
         let invalid = |what: String| SequenceError::invalid(path, format!("ropes[{k}]: {what}"));
         if let Some(s) = &rope.segmentation {
             s.range()
@@ -93,9 +165,7 @@ pub(crate) fn check_ropes(config: &DloConfig, path: &str) -> Result<(), Sequence
             }
         }
     }
-    let names: Vec<String> = (0..config.ropes.len())
-        .map(|k| rope_name(config, k))
-        .collect();
+    let names: Vec<String> = (0..ropes.len()).map(|k| rope_name(ropes, k)).collect();
     if let Some(k) = (1..names.len()).find(|&k| names[..k].contains(&names[k])) {
         return Err(SequenceError::invalid(
             path,
@@ -108,49 +178,48 @@ pub(crate) fn check_ropes(config: &DloConfig, path: &str) -> Result<(), Sequence
     Ok(())
 }
 
-/// Rope `k`'s name in `config`.
-fn rope_name(config: &DloConfig, k: usize) -> String {
-    config
-        .ropes
+/// Rope `k`'s name among `ropes`.
+fn rope_name(ropes: &[RopeEntry], k: usize) -> String {
+    ropes
         .get(k)
         .and_then(|r| r.name.clone())
         .unwrap_or_else(|| format!("rope-{k}"))
 }
 
-/// The ropes of a sequence of `frames` frames: `config.ropes`, or the one
-/// rope of its top-level keys (`hsv` the top-level range in force).
+/// The ropes of a sequence of `frames` frames: `ropes` (`dlo.json`'s), or
+/// the one rope of its top-level keys (`top`: the top-level colour range
+/// in force and `rope`). `read` reads a ground-truth file a rope names;
 /// `known(k)` may give rope `k`'s ground truth already read (the first
 /// rope's, when it is the top-level file).
-pub(crate) fn sequence_ropes<S: Source>(
-    source: &S,
-    config: &DloConfig,
-    hsv: HsvRange,
+pub(crate) fn sequence_ropes(
+    ropes: &[RopeEntry],
+    (hsv, top_rope): (HsvRange, Option<RopeConfig>),
     frames: usize,
+    read: &dyn Fn(&str) -> Result<Truth, SequenceError>,
     known: impl Fn(usize) -> Option<Truth>,
 ) -> Result<Vec<SequenceRope>, SequenceError> {
-    let shared_prior = config.rope.map(|r| r.prior()).unwrap_or_default();
-    if config.ropes.is_empty() {
+    let shared_prior = top_rope.map(|r| r.prior()).unwrap_or_default();
+    if ropes.is_empty() {
         let truth = known(0).unwrap_or_else(|| Truth::none(frames));
         return Ok(vec![SequenceRope {
-            name: rope_name(config, 0),
+            name: rope_name(ropes, 0),
             hsv,
             prior: shared_prior,
             groundtruth: truth.points,
             groundtruth_occluded: truth.occluded,
         }]);
     }
-    config
-        .ropes
+    ropes
         .iter()
         .enumerate()
         .map(|(k, rope)| {
             let truth = match (&rope.groundtruth, known(k)) {
-                (Some(name), _) => read_groundtruth(source, name, true, frames)?,
+                (Some(name), _) => read(name)?,
                 (None, Some(read)) => read,
                 (None, None) => Truth::none(frames),
             };
             Ok(SequenceRope {
-                name: rope_name(config, k),
+                name: rope_name(ropes, k),
                 hsv: rope
                     .segmentation
                     .as_ref()

@@ -6,13 +6,15 @@ use std::cell::RefCell;
 use serde::{Deserialize, Serialize};
 use upetrack::math::Vec3;
 use upetrack::perception::initialisation::RopePrior;
-use upetrack::tracker::{TrackerError, MAX_ROPES};
+use upetrack::several::MAX_ROPES;
+use upetrack::tracker::TrackerError;
 use upetrack::{CameraIntrinsics, Frame, HsvRange, MultiTracker, Params, Rect, Tracker};
 
 use crate::decode::{decode_color, decode_depth, DepthImage, RgbImage};
 use crate::error::SequenceError;
 use crate::recording_info::RecordingInfo;
-pub use crate::ropes::{RopeEntry, SequenceRope};
+use crate::ropes::Truth;
+pub use crate::ropes::{RopeConfig, RopeEntry, SegmentationConfig, SequenceRope};
 use crate::source::{is_inside_name, Source};
 
 /// Most frames accepted in one sequence.
@@ -60,40 +62,6 @@ impl IntrinsicsFile {
     }
 }
 
-/// HSV thresholds in `dlo.json`.
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-pub struct SegmentationConfig {
-    /// `[h, s, v]` lower bounds.
-    pub hsv_lower: [u8; 3],
-    /// `[h, s, v]` upper bounds.
-    pub hsv_upper: [u8; 3],
-    /// Colour noise allowed for when the saturation is tested, in 8-bit
-    /// levels of chroma (`max - min` of a pixel's R, G, B); absent: 0,
-    /// OpenCV's `inRange` exactly ([`HsvRange::chroma_noise`]).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub chroma_noise: Option<u8>,
-}
-
-impl SegmentationConfig {
-    /// The `dlo.json` form of a range (`chroma_noise` left out when 0).
-    pub fn of(range: &HsvRange) -> Self {
-        Self {
-            hsv_lower: range.lower,
-            hsv_upper: range.upper,
-            chroma_noise: (range.chroma_noise > 0).then_some(range.chroma_noise),
-        }
-    }
-
-    /// The range it describes.
-    pub fn range(&self) -> HsvRange {
-        HsvRange {
-            lower: self.hsv_lower,
-            upper: self.hsv_upper,
-            chroma_noise: self.chroma_noise.unwrap_or(0),
-        }
-    }
-}
-
 /// One occlusion entry of `dlo.json`: colour pixels of `rect` blacked out
 /// for frames `frames[0]..=frames[1]`.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -114,27 +82,6 @@ impl OcclusionConfig {
     /// `true` when it applies to frame `index`.
     pub fn active_at(&self, index: usize) -> bool {
         (self.frames[0]..=self.frames[1]).contains(&(index as u64))
-    }
-}
-
-/// What the user knows of the rope, in `dlo.json`'s `rope` (both optional).
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Default)]
-pub struct RopeConfig {
-    /// Length, metres.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub length_m: Option<f64>,
-    /// Diameter, metres.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub diameter_m: Option<f64>,
-}
-
-impl RopeConfig {
-    /// The core's prior.
-    pub fn prior(&self) -> RopePrior {
-        RopePrior {
-            length: self.length_m,
-            diameter: self.diameter_m,
-        }
     }
 }
 
@@ -219,7 +166,7 @@ impl DloConfig {
                 .validate()
                 .map_err(|e| SequenceError::invalid(path, format!("rope: {e}")))?;
         }
-        crate::ropes::check_ropes(self, path)?;
+        crate::ropes::check_ropes(&self.ropes, path)?;
         if let Some(gt) = &self.groundtruth {
             if !is_inside_name(gt) {
                 return Err(SequenceError::invalid(
@@ -313,24 +260,6 @@ pub(crate) fn read_groundtruth<S: Source>(
         points: groundtruth,
         occluded: groundtruth_occluded,
     })
-}
-
-/// One rope's ground truth as read: per frame index its points (when
-/// given) and whether part of it is hidden.
-#[derive(Debug, Clone, PartialEq, Default)]
-pub(crate) struct Truth {
-    pub(crate) points: Vec<Option<Vec<Vec3>>>,
-    pub(crate) occluded: Vec<bool>,
-}
-
-impl Truth {
-    /// No ground truth for `frames` frames.
-    pub(crate) fn none(frames: usize) -> Self {
-        Self {
-            points: vec![None; frames],
-            occluded: vec![false; frames],
-        }
-    }
 }
 
 /// A decoded colour/depth pair.
@@ -656,9 +585,11 @@ impl<S: Source> Sequence<S> {
             .unwrap_or_else(|| "groundtruth.json".to_string());
         let frames = color_files.len();
         let truth = read_groundtruth(&source, &gt_name, config.groundtruth.is_some(), frames)?;
-        let ropes = crate::ropes::sequence_ropes(&source, &config, hsv, frames, |k| {
-            (k == 0).then(|| truth.clone())
-        })?;
+        let read = |name: &str| read_groundtruth(&source, name, true, frames);
+        let ropes =
+            crate::ropes::sequence_ropes(&config.ropes, (hsv, config.rope), frames, &read, |k| {
+                (k == 0).then(|| truth.clone())
+            })?;
         // The first rope's are the sequence's (readers of one rope).
         let hsv = ropes.first().map_or(hsv, |r| r.hsv);
         let (groundtruth, groundtruth_occluded) = match ropes.first() {

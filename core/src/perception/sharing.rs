@@ -15,6 +15,7 @@ use alloc::vec::Vec;
 
 use super::camera::CameraIntrinsics;
 use super::frame::Frame;
+use super::initialisation::TakenRope;
 use super::segmentation::Mask;
 use crate::math::{nearest_on_segment, Vec2, Vec3};
 
@@ -38,6 +39,19 @@ pub struct PixelShare {
     pub own: Mask,
     /// The pixels of the other ropes: they hide this one where they lie.
     pub others: Mask,
+}
+
+/// What the other ropes tracked in the same frame leave a rope.
+#[derive(Debug, Clone)]
+pub struct OtherRopes {
+    /// Their pixels: they hide this rope as an occluder does.
+    pub pixels: Mask,
+    /// Every pixel of this rope's colour, theirs included: initialisation
+    /// looks for this rope among all the candidates of its colour (so a
+    /// crossing with another rope is walked straight through)...
+    pub colour: Mask,
+    /// ...and leaves the candidates lying along these ropes to them.
+    pub taken: Vec<TakenRope>,
 }
 
 /// Who a pixel of some rope's colour belongs to.

@@ -21,6 +21,7 @@ use crate::perception::point_cloud::build_cloud;
 use crate::perception::segmentation::{
     segment, without_wide_parts, HsvRange, Mask, Rect, SegmentationError,
 };
+use crate::perception::sharing::{OtherRopes, MAX_SHARED};
 use crate::polyline::{polyline_length, resample_uniform};
 use crate::step::{Algorithm, StepInput};
 use crate::upe::explain::StepExplanation;
@@ -31,11 +32,9 @@ use crate::visibility::{classify_nodes, visible_nodes_relative, NodeVisibility};
 
 mod camera;
 mod recovery;
-mod several;
 mod stepper;
 use camera::CameraFollowing;
-pub use recovery::RecoveryBackoff;
-pub use several::{MultiTracker, OtherRopes, MAX_ROPES};
+pub use recovery::{RecoveryBackoff, MAX_RECOVERY_WAIT};
 pub use stepper::{StepReports, Stepper};
 
 /// A tracked rope longer than this multiple of its length at
@@ -53,13 +52,6 @@ pub const UNEXPLAINED_LIMIT: f64 = 0.3;
 /// initialisation, and a rope that became long enough to pass the length
 /// rule shows more points than one that did not.
 pub const JUMP_RETRY_GROWTH: f64 = 0.1;
-/// Longest wait, in frames, between recoveries from steps that contradict
-/// the images (`2^k - 1` frames after the `k`-th recovery in a row): a
-/// recovery costs a whole initialisation (10-50 ms at 1280x720, against
-/// half a millisecond for a step), so a state that keeps contradicting
-/// the images costs at most about one initialisation in this many frames,
-/// yet is still retried. 63 frames: two seconds at 30 frames/s.
-pub const MAX_RECOVERY_WAIT: u32 = 63;
 
 /// Errors building or reconfiguring a tracker.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -85,13 +77,14 @@ pub enum TrackerError {
         /// What is wrong with it.
         reason: &'static str,
     },
-    /// A [`MultiTracker`] of no ropes or more than [`MAX_ROPES`].
-    #[error("a tracker follows 1 to {max} ropes, not {count}", max = MAX_ROPES)]
+    /// A tracker of several ropes of no ropes or more than
+    /// [`MAX_SHARED`].
+    #[error("a tracker follows 1 to {max} ropes, not {count}", max = MAX_SHARED)]
     RopeCount {
         /// The number of ropes asked for.
         count: usize,
     },
-    /// A rope of a [`MultiTracker`] seen by another camera than the first.
+    /// A rope of a tracker of several seen by another camera than the first.
     #[error(
         "rope {rope} has other camera intrinsics than rope 0: all ropes are seen by one camera"
     )]
@@ -185,8 +178,9 @@ pub struct Observation {
     pub occlusions: Vec<Rect>,
     /// Mask pixels in parts too wide to be the rope, left out of `cloud`.
     pub too_wide: usize,
-    /// What the other ropes tracked in the frame ([`MultiTracker`])
-    /// leave this one; `None` for one rope.
+    /// What the other ropes tracked in the frame
+    /// ([`crate::several::MultiTracker`]) leave this one; `None` for one
+    /// rope.
     pub others: Option<OtherRopes>,
 }
 

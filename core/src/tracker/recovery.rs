@@ -1,7 +1,13 @@
 //! How often a tracked state that contradicts the images is replaced by a
 //! rope found again: recoveries in a row back off.
 
-use super::MAX_RECOVERY_WAIT;
+/// Longest wait, in frames, between recoveries from steps that contradict
+/// the images (`2^k - 1` frames after the `k`-th recovery in a row): a
+/// recovery costs a whole initialisation (10-50 ms at 1280x720, against
+/// half a millisecond for a step), so a state that keeps contradicting
+/// the images costs at most about one initialisation in this many frames,
+/// yet is still retried. 63 frames: two seconds at 30 frames/s.
+pub const MAX_RECOVERY_WAIT: u32 = 63;
 
 /// How often a state that contradicts the images is re-initialised: after
 /// the `k`-th recovery in a row, the next waits `2^k - 1` frames (at most

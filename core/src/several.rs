@@ -1,28 +1,16 @@
-//! Several ropes in one frame: one [`Tracker`] per rope, each stepping on
+//! Several ropes in one frame, above the tracker of one: one [`Tracker`] per rope, each stepping on
 //! the pixels [`share_pixels`] gives it, the others' pixels hiding it as an
 //! occluder does.
 
 use alloc::vec::Vec;
 
-use super::{FrameOutput, Observation, Tracker, TrackerError, UNEXPLAINED_REACH};
 use crate::math::Vec2;
 use crate::perception::frame::Frame;
 use crate::perception::initialisation::TakenRope;
 use crate::perception::segmentation::{Mask, Rect};
+use crate::perception::sharing::OtherRopes;
 use crate::perception::sharing::{share_pixels, PixelShare, RopeLine, MAX_SHARED};
-
-/// What the other ropes tracked in the same frame leave a rope.
-#[derive(Debug, Clone)]
-pub struct OtherRopes {
-    /// Their pixels: they hide this rope as an occluder does.
-    pub pixels: Mask,
-    /// Every pixel of this rope's colour, theirs included: initialisation
-    /// looks for this rope among all the candidates of its colour (so a
-    /// crossing with another rope is walked straight through)...
-    pub colour: Mask,
-    /// ...and leaves the candidates lying along these ropes to them.
-    pub taken: Vec<TakenRope>,
-}
+use crate::tracker::{FrameOutput, Observation, Tracker, TrackerError, UNEXPLAINED_REACH};
 
 /// Most ropes one [`MultiTracker`] follows: as many as pixels are shared
 /// between ([`MAX_SHARED`]).
