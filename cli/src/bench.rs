@@ -3,11 +3,14 @@
 //! synthetic D435i-like frames (static-s and dynamic-pull at 640x480,
 //! static-s at 1280x720 on a table as saturated as the rope) or on given
 //! sequences (whose
-//! reading and decoding is timed apart: the contract's `total_ms` excludes it).
+//! reading and decoding is timed apart: the contract's `total_ms` excludes it;
+//! a sequence of several ropes is tracked whole, its "cloud" the sharing of
+//! pixels with every rope's cloud and its step every rope's).
 
 use std::time::Instant;
 
-use upetrack::{Frame, Tracker};
+use upetrack::perception::initialisation::RopePrior;
+use upetrack::{Frame, MultiTracker, Tracker};
 use upetrack_io::eval::quantile;
 use upetrack_io::run::run_frame;
 use upetrack_synth::{Scenario, ScenarioKind, Variant};
@@ -24,6 +27,9 @@ struct Prepared {
     frames: Vec<(Vec<u8>, Vec<u16>, Vec<upetrack::Rect>)>,
     /// Decoding time of each frame's files, ms (none for rendered frames).
     decode_ms: Vec<f64>,
+    /// With several ropes, each one's colour range and prior (tracked
+    /// together by a `MultiTracker`); empty for one.
+    ropes: Vec<(upetrack::HsvRange, RopePrior)>,
 }
 
 /// Per-frame times of every stage, ms, over all frames and runs.
@@ -36,6 +42,9 @@ struct StageTimes {
 }
 
 fn timed(p: &Prepared, params: upetrack::Params, repeats: usize) -> Result<StageTimes, CliError> {
+    if !p.ropes.is_empty() {
+        return timed_several(p, params, repeats);
+    }
     let mut t = StageTimes::default();
     for _ in 0..repeats {
         let mut tracker =
@@ -51,6 +60,47 @@ fn timed(p: &Prepared, params: upetrack::Params, repeats: usize) -> Result<Stage
             t.cloud.push(rec.cloud_ms);
             t.track.push(rec.track_ms);
             t.total.push(rec.total_ms);
+        }
+    }
+    Ok(t)
+}
+
+/// [`timed`] for several ropes: segmentation (one mask per colour), the
+/// sharing of pixels with every rope's cloud, and every rope's step.
+fn timed_several(
+    p: &Prepared,
+    params: upetrack::Params,
+    repeats: usize,
+) -> Result<StageTimes, CliError> {
+    let input = |e: upetrack::tracker::TrackerError| CliError::input(e.to_string());
+    let mut t = StageTimes::default();
+    for _ in 0..repeats {
+        let trackers = p
+            .ropes
+            .iter()
+            .map(|(hsv, prior)| {
+                let mut one = Tracker::new(params, p.camera, *hsv)?;
+                one.set_rope_prior(*prior)?;
+                Ok(one)
+            })
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(input)?;
+        let mut ropes = MultiTracker::new(trackers).map_err(input)?;
+        for (rgb, depth, occ) in &p.frames {
+            let frame = Frame::new(p.camera.width, p.camera.height, rgb, depth, p.depth_scale)
+                .map_err(|e| CliError::input(e.to_string()))?;
+            let t0 = Instant::now();
+            let masks = ropes.segment(&frame, occ).map_err(input)?;
+            let t1 = Instant::now();
+            let observations = ropes.observe(&frame, &masks, occ);
+            let t2 = Instant::now();
+            ropes.step(&frame, &masks, observations, occ);
+            let t3 = Instant::now();
+            let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1000.0;
+            t.segment.push(ms(t0, t1));
+            t.cloud.push(ms(t1, t2));
+            t.track.push(ms(t2, t3));
+            t.total.push(ms(t0, t3));
         }
     }
     Ok(t)
@@ -82,6 +132,7 @@ pub fn cmd_bench(args: &BenchArgs) -> Result<(), CliError> {
                 depth_scale: 0.001,
                 frames: fr,
                 decode_ms: Vec::new(),
+                ropes: Vec::new(),
             });
         }
     } else {
@@ -95,13 +146,23 @@ pub fn cmd_bench(args: &BenchArgs) -> Result<(), CliError> {
                 decode_ms.push(t.elapsed().as_secs_f64() * 1000.0);
                 fr.push((d.color, d.depth, seq.occlusions_at(i)));
             }
+            let several = seq.ropes.len() > 1;
             sets.push(Prepared {
-                name: path.clone(),
+                name: if several {
+                    format!("{path} ({} ropes)", seq.ropes.len())
+                } else {
+                    path.clone()
+                },
                 camera: seq.camera,
                 hsv: seq.hsv,
                 depth_scale: seq.depth_scale,
                 frames: fr,
                 decode_ms,
+                ropes: if several {
+                    seq.ropes.iter().map(|r| (r.hsv, r.prior)).collect()
+                } else {
+                    Vec::new()
+                },
             });
         }
     }
