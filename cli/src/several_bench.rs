@@ -38,6 +38,9 @@ pub struct SeveralRow {
     pub mean_mm: f64,
     /// Largest frame error beside the other ropes, mm.
     pub max_mm: f64,
+    /// Frames this rope was lost on (its last nodes repeated, and counted
+    /// in the errors).
+    pub lost_frames: usize,
     /// Mean frame error of the same scene made with this rope alone, mm.
     pub alone_scene_mm: f64,
     /// Mean frame error in the same images, the other ropes not tracked, mm.
@@ -63,8 +66,9 @@ fn ensure_scene(
     only: Option<usize>,
     frames: usize,
 ) -> Result<(), CliError> {
+    // `hints`: dlo.json names a pixel on each rope (written since then).
     let print = format!(
-        "simulator {SIMULATOR_VERSION}, {} only {only:?}, {frames} frames, seed {SEED}\n",
+        "simulator {SIMULATOR_VERSION}, {} only {only:?}, {frames} frames, seed {SEED}, hints\n",
         kind.name()
     );
     ensure_written(dir, &print, |partial| {
@@ -142,6 +146,7 @@ pub fn run(args: &CompareArgs, params: Params, algorithms: &[Algorithm]) -> Resu
                     algorithm: a.name().to_string(),
                     mean_mm: mine.mm.mean,
                     max_mm: mine.max_mm,
+                    lost_frames: mine.lost_frames,
                     alone_scene_mm: mean_of(&alone),
                     alone_images_mm: mean_of(&same),
                     identity_swaps: swaps,
@@ -171,20 +176,22 @@ pub fn run(args: &CompareArgs, params: Params, algorithms: &[Algorithm]) -> Resu
 fn markdown(rows: &[SeveralRow], frames: usize) -> String {
     let mut s = format!(
         "Scenes of {frames} frames (seed {SEED}; `upetrack synth <scene>`). Mean and max frame error of each rope \
-         tracked beside the others; its mean error alone in the same scene made without the others (`--only K`) \
+         tracked beside the others, and the frames it was lost on (out of view: its last nodes repeated, \
+         counted in the errors); its mean error alone in the same scene made without the others (`--only K`) \
          and in the same images with the others not tracked, and the ratios; the scene's identity swaps; the \
          median step of all its ropes and the median whole frame.\n\n\
-         | scene | rope | algorithm | mean mm | max mm | alone (scene) mm | ratio | alone (images) mm | ratio | swaps | step ms | frame ms |\n\
-         |---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
+         | scene | rope | algorithm | mean mm | max mm | lost | alone (scene) mm | ratio | alone (images) mm | ratio | swaps | step ms | frame ms |\n\
+         |---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
     );
     for r in rows {
         s += &format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
             r.scene,
             r.rope,
             r.algorithm,
             fmt(r.mean_mm, 2),
             fmt(r.max_mm, 1),
+            r.lost_frames,
             fmt(r.alone_scene_mm, 2),
             fmt(r.mean_mm / r.alone_scene_mm, 2),
             fmt(r.alone_images_mm, 2),

@@ -137,6 +137,51 @@ fn a_rope_pulled_out_from_under_another_of_its_colour_stays_itself() {
     }
 }
 
+#[test]
+fn a_rope_that_leaves_the_view_and_comes_back_is_found_again_as_itself() {
+    let dir = scene("rope-leaves-view", &[]);
+    let (rows, table) = eval(&dir, "upetrack");
+    let all = row(&rows, "/all");
+    assert_eq!(all["identity_swaps"], 0, "{table}");
+    assert_eq!(all["swapped_frames"], 0, "{table}");
+    // It did leave: lost while out of the image (13 of 45 frames).
+    let gone = row(&rows, "/blue-b");
+    assert!(number(gone, "lost_frames") >= 5.0, "{table}");
+    // The other stayed tracked throughout, and the one back is itself on
+    // the last frames (the command's per-frame errors).
+    let stayed = row(&rows, "/blue-a");
+    assert!(
+        number(stayed, "lost_frames") == 0.0 && number(stayed, "max_mm") < 5.0,
+        "{table}"
+    );
+    let csv = dir.with_extension("frames.csv");
+    let out = run(&[
+        "eval",
+        dir.to_str().expect("utf-8"),
+        "--per-frame",
+        csv.to_str().expect("utf-8"),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&csv).expect("csv");
+    let back: Vec<(f64, bool)> = text
+        .lines()
+        .filter(|l| l.contains("/blue-b,"))
+        .map(|l| {
+            let c: Vec<&str> = l.split(',').collect();
+            (c[2].parse::<f64>().unwrap_or(f64::NAN), c[7] == "true")
+        })
+        .collect();
+    let last = &back[back.len() - 5..];
+    assert!(
+        last.iter().all(|(mm, lost)| !lost && *mm < 3.0),
+        "{last:?}\n{table}"
+    );
+}
+
 /// A copy of `dir` (frames linked) whose dlo.json keeps only rope `k` of
 /// its `ropes`: that rope tracked alone in the same images.
 fn with_one_rope(dir: &Path, k: usize, name: &str) -> PathBuf {

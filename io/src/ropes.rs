@@ -103,6 +103,11 @@ pub struct RopeEntry {
     /// the first rope, none for the others).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub groundtruth: Option<String>,
+    /// A pixel `[u, v]` on this rope in the first frame: the candidate
+    /// through it is this rope (as a click on the page). Ropes of one
+    /// colour are otherwise taken longest first, in this list's order.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hint: Option<[f64; 2]>,
 }
 
 /// One rope of an opened sequence.
@@ -118,6 +123,8 @@ pub struct SequenceRope {
     pub groundtruth: Vec<Option<Vec<Vec3>>>,
     /// Per frame index: an occluder (or another rope) hides part of it.
     pub groundtruth_occluded: Vec<bool>,
+    /// A pixel on it in the first frame, for its first initialisation.
+    pub hint: Option<[f64; 2]>,
 }
 
 impl SequenceRope {
@@ -154,6 +161,11 @@ pub(crate) fn check_ropes(ropes: &[RopeEntry], path: &str) -> Result<(), Sequenc
                 return Err(invalid(format!(
                     "groundtruth {gt:?} must name a file inside the sequence folder"
                 )));
+            }
+        }
+        if let Some(h) = rope.hint {
+            if !h.iter().all(|c| c.is_finite()) {
+                return Err(invalid(format!("hint {h:?} is not a pixel")));
             }
         }
         if let Some(name) = &rope.name {
@@ -207,6 +219,7 @@ pub(crate) fn sequence_ropes(
             prior: shared_prior,
             groundtruth: truth.points,
             groundtruth_occluded: truth.occluded,
+            hint: None,
         }]);
     }
     ropes
@@ -227,6 +240,7 @@ pub(crate) fn sequence_ropes(
                 prior: rope.rope.map_or(shared_prior, |r| r.prior()),
                 groundtruth: truth.points,
                 groundtruth_occluded: truth.occluded,
+                hint: rope.hint,
             })
         })
         .collect()

@@ -670,6 +670,7 @@ impl<S: Source> Sequence<S> {
             .map(|r| {
                 let mut t = Tracker::new(params, self.camera, r.hsv)?;
                 t.set_rope_prior(r.prior)?;
+                t.set_rope_hint(r.hint);
                 Ok(t)
             })
             .collect::<Result<Vec<_>, TrackerError>>()?;

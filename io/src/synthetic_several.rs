@@ -36,6 +36,7 @@ pub fn write_several(
                 diameter_m: Some(scene.ropes[k].settings.thickness),
             }),
             groundtruth: Some(groundtruth_file(&scene.names[k])),
+            hint: scene.hint(k).map(|h| [h.x, h.y]),
         })
         .collect();
     let dlo = DloConfig {

@@ -44,11 +44,19 @@ pub enum SeveralKind {
     /// Three ropes (red, blue, green), the green lying across the other
     /// two; a box passes over the middle while each is dragged at one end.
     ThreeColours,
+    /// Two ropes of one colour side by side; one is dragged out of the
+    /// image and back beside the other.
+    LeavesView,
 }
 
 impl SeveralKind {
     /// Every scene of several ropes.
-    pub const ALL: [Self; 3] = [Self::Crossing, Self::FromUnder, Self::ThreeColours];
+    pub const ALL: [Self; 4] = [
+        Self::Crossing,
+        Self::FromUnder,
+        Self::ThreeColours,
+        Self::LeavesView,
+    ];
 
     /// Its command-line name.
     pub fn name(&self) -> &'static str {
@@ -56,6 +64,7 @@ impl SeveralKind {
             Self::Crossing => "two-ropes-crossing",
             Self::FromUnder => "rope-from-under",
             Self::ThreeColours => "three-ropes",
+            Self::LeavesView => "rope-leaves-view",
         }
     }
 
@@ -70,13 +79,14 @@ impl SeveralKind {
             Self::Crossing => "two blue ropes in an X; from 30 % of the frames on the upper one is dragged 14 cm sideways across the lower, the crossing sliding along it",
             Self::FromUnder => "two blue ropes in an X; from 30 % of the frames on the lower one is pulled 14 cm along its own axis, its far end passing out from under the upper",
             Self::ThreeColours => "a red, a blue and a green rope, the green lying across the other two; a box passes 8 cm over the middle while each is dragged 6 cm at one end",
+            Self::LeavesView => "two blue ropes side by side; from 15 % of the frames on one is dragged 34 cm sideways out of the image, and from 55 % back beside the other",
         }
     }
 
     /// Number of ropes.
     pub fn rope_count(&self) -> usize {
         match self {
-            Self::Crossing | Self::FromUnder => 2,
+            Self::Crossing | Self::FromUnder | Self::LeavesView => 2,
             Self::ThreeColours => 3,
         }
     }
@@ -132,13 +142,15 @@ pub struct SeveralRopes {
 
 /// A grasp of a scene being made: rope `rope`'s particle `particle`
 /// (clamped to its last) moved by `offset` from `start` to `end` (shares
-/// of the frames).
+/// of the frames), from its settled position moved by `from` (where an
+/// earlier grasp of it left it; zero for the first).
 struct Grasp {
     rope: usize,
     particle: usize,
     offset: Vec3,
     start: f64,
     end: f64,
+    from: Vec3,
 }
 
 /// Which of a scene's ropes are made.
@@ -224,14 +236,16 @@ impl SeveralRopes {
                         particle: 0,
                         offset: Vec3::new(0.14, 0.0, 0.0),
                         start: 0.3,
-                        end: 0.85
+                        end: 0.85,
+                        from: Vec3::zeros(),
                     },
                     Grasp {
                         rope: 1,
                         particle: usize::MAX,
                         offset: Vec3::new(0.14, 0.0, 0.0),
                         start: 0.3,
-                        end: 0.85
+                        end: 0.85,
+                        from: Vec3::zeros(),
                     },
                 ],
                 Vec::new(),
@@ -258,7 +272,8 @@ impl SeveralRopes {
                     particle: 0,
                     offset: Vec3::new(-0.14, 0.0, 0.0),
                     start: 0.3,
-                    end: 0.85
+                    end: 0.85,
+                    from: Vec3::zeros(),
                 }],
                 Vec::new(),
             ),
@@ -289,21 +304,24 @@ impl SeveralRopes {
                         particle: usize::MAX,
                         offset: Vec3::new(0.0, -0.06, 0.0),
                         start: 0.35,
-                        end: 0.85
+                        end: 0.85,
+                        from: Vec3::zeros(),
                     },
                     Grasp {
                         rope: 1,
                         particle: usize::MAX,
                         offset: Vec3::new(0.0, 0.06, 0.0),
                         start: 0.35,
-                        end: 0.85
+                        end: 0.85,
+                        from: Vec3::zeros(),
                     },
                     Grasp {
                         rope: 2,
                         particle: usize::MAX,
                         offset: Vec3::new(0.06, 0.0, 0.0),
                         start: 0.35,
-                        end: 0.85
+                        end: 0.85,
+                        from: Vec3::zeros(),
                     },
                 ],
                 alloc::vec![MovingBox {
@@ -321,6 +339,48 @@ impl SeveralRopes {
                     },
                 }],
             ),
+            SeveralKind::LeavesView => {
+                let out = Vec3::new(0.34, 0.0, 0.0);
+                // Both ends of the second rope, out and back.
+                let grasps = [0, usize::MAX].into_iter().flat_map(|particle| {
+                    [
+                        Grasp {
+                            rope: 1,
+                            particle,
+                            offset: out,
+                            start: 0.15,
+                            end: 0.4,
+                            from: Vec3::zeros(),
+                        },
+                        Grasp {
+                            rope: 1,
+                            particle,
+                            offset: -out,
+                            start: 0.55,
+                            end: 0.8,
+                            from: out,
+                        },
+                    ]
+                });
+                (
+                    alloc::vec![
+                        Laid {
+                            shape: line([-0.06, -0.2], [-0.06, 0.2], 0.03),
+                            color: BLUE,
+                            name: "blue-a",
+                            over: &[]
+                        },
+                        Laid {
+                            shape: line([0.1, -0.2], [0.1, 0.2], -0.03),
+                            color: BLUE,
+                            name: "blue-b",
+                            over: &[]
+                        },
+                    ],
+                    grasps.collect(),
+                    Vec::new(),
+                )
+            }
         };
         let settings = RopeSettings {
             length: ROPE_LENGTH,
@@ -359,6 +419,7 @@ impl SeveralRopes {
                      offset,
                      start,
                      end,
+                     from,
                  }| {
                     let rope = keep.iter().position(|&x| x == k)?;
                     let particle = particle.min(ropes[rope].x.len() - 1);
@@ -369,7 +430,7 @@ impl SeveralRopes {
                         offset,
                         circular: false,
                     };
-                    Some((rope, pull, ropes[rope].x[particle]))
+                    Some((rope, pull, ropes[rope].x[particle] + from))
                 },
             )
             .collect();
@@ -402,6 +463,32 @@ impl SeveralRopes {
     /// The camera.
     pub fn camera(&self) -> CameraIntrinsics {
         self.render.camera
+    }
+
+    /// A pixel on rope `k` now, as a user would click to say which rope it
+    /// is: of the middle half of it, the point farthest from every other
+    /// rope (never a crossing); `None` when it is not in view.
+    pub fn hint(&self, k: usize) -> Option<upetrack::math::Vec2> {
+        let rope = self.ropes.get(k)?;
+        let n = rope.x.len();
+        let clearance = |p: &Vec3| {
+            self.ropes
+                .iter()
+                .enumerate()
+                .filter(|(j, _)| *j != k)
+                .flat_map(|(_, o)| o.x.iter())
+                .map(|q| libm::hypot(p.x - q.x, p.y - q.y))
+                .fold(f64::INFINITY, f64::min)
+        };
+        let best = rope.x[n / 4..(3 * n / 4).max(n / 4 + 1).min(n)]
+            .iter()
+            .max_by(|a, b| clearance(a).total_cmp(&clearance(b)))?;
+        let q = self
+            .render
+            .camera
+            .project(&self.render.pose().world_to_camera(best))?;
+        let cam = &self.render.camera;
+        (q.x >= 0.0 && q.y >= 0.0 && q.x < cam.width as f64 && q.y < cam.height as f64).then_some(q)
     }
 
     /// Simulates and renders the next frame, or `None` after the last.
