@@ -113,6 +113,8 @@ pub(crate) struct RopeInfo {
     rope: RopeConfig,
     /// Flat metres per frame, or null.
     groundtruth: Vec<Option<Vec<f64>>>,
+    /// A pixel on it in the first frame (`dlo.json`'s `hint`), or null.
+    hint: Option<[f64; 2]>,
 }
 
 impl RopeInfo {
@@ -126,6 +128,7 @@ impl RopeInfo {
                 diameter_m: rope.prior.diameter,
             },
             groundtruth: flat_truth(&rope.groundtruth),
+            hint: rope.hint,
         }
     }
 }
