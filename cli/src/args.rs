@@ -294,8 +294,9 @@ pub struct CompareArgs {
     #[arg(long, requires = "random")]
     pub count: Option<u64>,
     /// Run on the scenes of several ropes instead: each rope beside the
-    /// others against the same rope alone, and the identity swaps.
-    #[arg(long, conflicts_with = "random")]
+    /// others against the same rope alone, and the identity swaps; with
+    /// --random, on drawn scenes of several ropes of that seed range.
+    #[arg(long)]
     pub several: bool,
     /// Replace the text between the comparison markers of this page.
     #[arg(long, value_name = "page.md")]
@@ -379,6 +380,9 @@ pub const MAX_RANDOM_COUNT: u64 = 10_000;
 /// Largest `--depth-noise` multiplier.
 pub const MAX_DEPTH_NOISE: f64 = 10.0;
 
+/// The name of the drawn scenes of several ropes.
+pub const SEVERAL_RANDOM: &str = "several-random";
+
 /// What `synth` writes.
 #[derive(Debug, Clone, Copy)]
 pub enum SynthScenario {
@@ -388,6 +392,8 @@ pub enum SynthScenario {
     Random,
     /// A scene of several ropes.
     Several(SeveralKind),
+    /// A scene of several ropes drawn from the seed.
+    SeveralRandom,
 }
 
 fn parse_scenario(name: &str) -> Result<SynthScenario, String> {
@@ -396,6 +402,9 @@ fn parse_scenario(name: &str) -> Result<SynthScenario, String> {
     }
     if let Some(kind) = SeveralKind::parse(name) {
         return Ok(SynthScenario::Several(kind));
+    }
+    if name == SEVERAL_RANDOM {
+        return Ok(SynthScenario::SeveralRandom);
     }
     ScenarioKind::parse(name)
         .map(SynthScenario::Described)
@@ -430,6 +439,7 @@ pub fn scenario_name(kind: &ScenarioKind) -> String {
 fn scenario_names() -> String {
     let mut names: Vec<String> = ScenarioKind::EXAMPLES.iter().map(scenario_name).collect();
     names.extend(SeveralKind::ALL.iter().map(|k| k.name().to_string()));
+    names.push(SEVERAL_RANDOM.to_string());
     format!("one of random, {}", names.join(", "))
 }
 
@@ -447,6 +457,10 @@ pub fn scenario_list() -> String {
     for k in SeveralKind::ALL {
         s += &list_entry(k.name(), k.description());
     }
+    s += &list_entry(
+        SEVERAL_RANDOM,
+        "two or three ropes drawn from the seed: of one colour or three, crossing or not, one or two dragged or pulled at an end, a box passing or not (docs/synthetic.md)",
+    );
     s += "\nVariants (--variant):\n";
     for v in Variant::ALL {
         s += &list_entry(v.name, v.description);

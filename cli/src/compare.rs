@@ -269,11 +269,11 @@ pub fn cmd_compare(args: &CompareArgs) -> Result<(), CliError> {
     } else {
         crate::algorithms(&args.algorithm, &params)
     };
-    if let Some(range) = &args.random {
-        return crate::random_bench::run(args, range, params, &algorithms);
-    }
     if args.several {
         return crate::several_bench::run(args, params, &algorithms);
+    }
+    if let Some(range) = &args.random {
+        return crate::random_bench::run(args, range, params, &algorithms);
     }
     if let Some(unknown) = args
         .only

@@ -1,6 +1,7 @@
 //! `upetrack overlay`: draws a frame with the ground truth (green), the
-//! tracked nodes (red visible, yellow hidden) and the curve through them,
-//! to look at what the tracker did.
+//! tracked nodes (red visible, yellow hidden; with several ropes each
+//! rope's visible nodes in its own colour) and the curve through them, to
+//! look at what the tracker did.
 
 use upetrack::math::Vec3;
 use upetrack_io::result::TrackResult;
@@ -8,6 +9,10 @@ use upetrack_io::write::{encode_rgb_png, write_file};
 
 use crate::args::OverlayArgs;
 use crate::{open_sequence, CliError};
+
+/// Visible nodes of rope `k` of several (the page's colours): red, blue,
+/// green, then on.
+const ROPE_VISIBLE: [[u8; 3]; 4] = [[230, 30, 30], [32, 96, 255], [16, 176, 64], [192, 64, 224]];
 
 fn put(rgb: &mut [u8], w: i64, h: i64, x: i64, y: i64, c: [u8; 3]) {
     if x >= 0 && y >= 0 && x < w && y < h {
@@ -71,13 +76,22 @@ pub fn cmd_overlay(args: &OverlayArgs) -> Result<(), CliError> {
     }
     let cam = seq.camera;
     let project = |p: &Vec3| cam.project(p).map(|q| (q.x, q.y));
-    if let Some(Some(gt)) = seq.groundtruth.get(index) {
-        let pts: Vec<(f64, f64)> = gt.iter().filter_map(project).collect();
-        for s in pts.windows(2) {
-            line(&mut rgb, w, h, s[0], s[1], [0, 220, 0]);
+    // Every rope's truth and nodes (one rope: the sequence's and the
+    // result's frames); each rope's visible nodes in its own colour.
+    for k in 0..result.rope_count().max(seq.ropes.len()) {
+        let truth = seq.ropes.get(k).map(|r| &r.groundtruth);
+        if let Some(Some(gt)) = truth.and_then(|t| t.get(index)) {
+            let pts: Vec<(f64, f64)> = gt.iter().filter_map(project).collect();
+            for s in pts.windows(2) {
+                line(&mut rgb, w, h, s[0], s[1], [0, 220, 0]);
+            }
         }
-    }
-    if let Some(rec) = result.frames.iter().find(|f| f.frame == index) {
+        let Some(rope) = result.rope(k) else {
+            continue;
+        };
+        let Some(rec) = rope.frames.iter().find(|f| f.frame == index) else {
+            continue;
+        };
         let pts: Vec<Option<(f64, f64)>> = rec
             .nodes
             .iter()
@@ -88,6 +102,7 @@ pub fn cmd_overlay(args: &OverlayArgs) -> Result<(), CliError> {
                 line(&mut rgb, w, h, a, b, [255, 255, 255]);
             }
         }
+        let visible = ROPE_VISIBLE[k % ROPE_VISIBLE.len()];
         for (p, vis) in pts.iter().zip(&rec.visible) {
             if let Some(p) = p {
                 disc(
@@ -96,7 +111,7 @@ pub fn cmd_overlay(args: &OverlayArgs) -> Result<(), CliError> {
                     h,
                     *p,
                     3,
-                    if *vis { [230, 30, 30] } else { [255, 210, 0] },
+                    if *vis { visible } else { [255, 210, 0] },
                 );
             }
         }

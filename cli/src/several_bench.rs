@@ -114,6 +114,9 @@ fn open(dir: &Path) -> Result<AnySequence, CliError> {
 /// `upetrack compare --several [--frames N] [--data <dir>] [--algorithm A,B]
 /// [--params <params.json>] [--json ..] [--markdown ..] [--update <page.md>]`.
 pub fn run(args: &CompareArgs, params: Params, algorithms: &[Algorithm]) -> Result<(), CliError> {
+    if let Some(range) = &args.random {
+        return run_drawn(args, range, params, algorithms);
+    }
     let frames = args.frames.map_or(DEFAULT_SEVERAL_FRAMES, |n| n as usize);
     let data = args.data.as_path();
     let kinds = SeveralKind::ALL;
@@ -199,6 +202,198 @@ fn markdown(rows: &[SeveralRow], frames: usize) -> String {
             r.identity_swaps,
             fmt(r.step_ms, 3),
             fmt(r.frame_ms, 3),
+        );
+    }
+    s
+}
+
+/// One drawn scene of several ropes tracked by one algorithm.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct DrawnRow {
+    /// The seed.
+    pub seed: u64,
+    /// Algorithm name.
+    pub algorithm: String,
+    /// Ropes in the scene.
+    pub ropes: usize,
+    /// `true` when every rope has one colour.
+    pub one_colour: bool,
+    /// Each rope's mean frame error, mm, in the scene's order.
+    pub mean_mm: Vec<f64>,
+    /// The largest frame error of any rope, mm.
+    pub max_mm: f64,
+    /// Frames (of all ropes) above 20 mm.
+    pub frames_above_20mm: usize,
+    /// Frames (of all ropes) with ground truth.
+    pub evaluated_frames: usize,
+    /// Identity swaps.
+    pub identity_swaps: usize,
+    /// Median step of all ropes together, ms.
+    pub step_ms: f64,
+}
+
+/// The folder of drawn scene `seed` of several ropes in `data`.
+fn drawn_dir(data: &Path, seed: u64, frames: usize) -> PathBuf {
+    data.join(format!("several-random-{seed}-{frames}f"))
+}
+
+/// `upetrack compare --several --random tune|report [--count N]`: the
+/// drawn scenes of several ropes of a seed range; per algorithm the median,
+/// p90 and max of the ropes' mean errors, the share of frames above 20 mm
+/// and the identity swaps, and the worst scenes.
+fn run_drawn(
+    args: &CompareArgs,
+    range_name: &str,
+    params: Params,
+    algorithms: &[Algorithm],
+) -> Result<(), CliError> {
+    let range = upetrack_synth::SeedRange::parse(range_name)
+        .ok_or_else(|| CliError::usage(format!("--random {range_name}: tune or report")))?;
+    let frames = args
+        .frames
+        .map_or(upetrack_synth::random::DEFAULT_RANDOM_FRAMES, |n| {
+            n as usize
+        });
+    let seeds: Vec<u64> = range.seeds(args.count.unwrap_or(u64::MAX)).collect();
+    let data = args.data.as_path();
+    let bar = progress::bar(
+        seeds.len() as u64,
+        "scenes",
+        "drawn scenes of several ropes",
+    );
+    let rows = std::sync::Mutex::new(Vec::new());
+    crate::synth::for_each_parallel(&seeds, |&seed| {
+        let dir = drawn_dir(data, seed, frames);
+        let print = format!(
+            "simulator {SIMULATOR_VERSION}, several-random {seed}, {frames} frames, hints\n"
+        );
+        ensure_written(&dir, &print, |partial| {
+            upetrack_io::synthetic_several::write_several(
+                SeveralRopes::random(seed, frames),
+                false,
+                upetrack_io::write::JPEG_QUALITY,
+                &mut |(path, bytes)| upetrack_io::write::write_file(&partial.join(path), &bytes),
+            )?;
+            Ok(())
+        })?;
+        let seq = open(&dir)?;
+        let one_colour = seq.ropes.iter().all(|r| r.hsv == seq.ropes[0].hsv);
+        for &a in algorithms {
+            let (summaries, result) = track(
+                &seq,
+                &format!("several-random-{seed}"),
+                with_algorithm(params, a),
+            )?;
+            let all = summaries.last().ok_or_else(|| CliError::input("no rows"))?;
+            let steps: Vec<f64> = result.frames.iter().map(|f| f.track_ms).collect();
+            let row = DrawnRow {
+                seed,
+                algorithm: a.name().to_string(),
+                ropes: seq.ropes.len(),
+                one_colour,
+                mean_mm: summaries[..summaries.len().saturating_sub(1)]
+                    .iter()
+                    .map(|s| s.mm.mean)
+                    .collect(),
+                max_mm: all.max_mm,
+                frames_above_20mm: all.frames_above_20mm,
+                evaluated_frames: all.evaluated_frames,
+                identity_swaps: all.identity_swaps,
+                step_ms: quantile(&steps, 0.5),
+            };
+            if let Ok(mut rows) = rows.lock() {
+                rows.push(row);
+            }
+        }
+        bar.inc(1);
+        Ok(())
+    })?;
+    bar.finish_and_clear();
+    let mut rows = rows
+        .into_inner()
+        .map_err(|_| CliError::input("a worker failed"))?;
+    rows.sort_by(|a, b| (a.seed, &a.algorithm).cmp(&(b.seed, &b.algorithm)));
+    let text = drawn_markdown(&rows, range_name, &seeds, frames, algorithms);
+    println!("{text}");
+    if let Some(p) = &args.outputs.json {
+        upetrack_io::write::write_json(p, &rows)?;
+    }
+    if let Some(p) = &args.outputs.markdown {
+        upetrack_io::write::write_file(p, text.as_bytes())?;
+    }
+    if let Some(p) = &args.update {
+        update_between(p, &text, DRAWN_BEGIN_MARKER, DRAWN_END_MARKER)?;
+    }
+    Ok(())
+}
+
+/// Lines of a page between which `--update` writes the drawn table.
+const DRAWN_BEGIN_MARKER: &str = "<!-- several-random:begin -->";
+const DRAWN_END_MARKER: &str = "<!-- several-random:end -->";
+
+/// Scenes listed as the worst per algorithm.
+const WORST_LISTED: usize = 5;
+
+/// The table of the drawn scenes' rows.
+fn drawn_markdown(
+    rows: &[DrawnRow],
+    range: &str,
+    seeds: &[u64],
+    frames: usize,
+    algorithms: &[Algorithm],
+) -> String {
+    let (first, last) = (
+        seeds.first().copied().unwrap_or(0),
+        seeds.last().copied().unwrap_or(0),
+    );
+    let mut s = format!(
+        "Produced by `upetrack compare --several --random {range}`: {} drawn scenes of several ropes (seeds \
+         {first}..{last}) of {frames} frames. Per algorithm, over every rope of every scene: the median, p90 and \
+         max of the ropes' mean frame error; the share of frames (of all ropes) above 20 mm; the identity swaps and \
+         the scenes with one; the median step of all a scene's ropes; the worst scenes (their largest rope mean).\n\n\
+         | algorithm | ropes | median mm | p90 mm | max mm | frames > 20 mm | swaps (scenes) | step ms | worst scenes |\n\
+         |---|---:|---:|---:|---:|---:|---:|---:|---|\n",
+        seeds.len()
+    );
+    for a in algorithms {
+        let mine: Vec<&DrawnRow> = rows.iter().filter(|r| r.algorithm == a.name()).collect();
+        let means: Vec<f64> = mine
+            .iter()
+            .flat_map(|r| r.mean_mm.iter().copied())
+            .collect();
+        let above: usize = mine.iter().map(|r| r.frames_above_20mm).sum();
+        let evaluated: usize = mine.iter().map(|r| r.evaluated_frames).sum();
+        let swaps: usize = mine.iter().map(|r| r.identity_swaps).sum();
+        let swapped = mine.iter().filter(|r| r.identity_swaps > 0).count();
+        let steps: Vec<f64> = mine.iter().map(|r| r.step_ms).collect();
+        let worst_of = |r: &DrawnRow| r.mean_mm.iter().copied().fold(f64::NAN, f64::max);
+        let mut worst = mine.clone();
+        worst.sort_by(|x, y| worst_of(y).total_cmp(&worst_of(x)));
+        let listed: Vec<String> = worst
+            .iter()
+            .take(WORST_LISTED)
+            .map(|r| {
+                format!(
+                    "{} ({} mm, {} ropes{})",
+                    r.seed,
+                    fmt(worst_of(r), 1),
+                    r.ropes,
+                    if r.one_colour { ", one colour" } else { "" }
+                )
+            })
+            .collect();
+        s += &format!(
+            "| {} | {} | {} | {} | {} | {} | {} ({}) | {} | {} |\n",
+            a.name(),
+            means.len(),
+            fmt(quantile(&means, 0.5), 2),
+            fmt(quantile(&means, 0.9), 2),
+            fmt(means.iter().copied().fold(f64::NAN, f64::max), 1),
+            fmt(100.0 * above as f64 / evaluated.max(1) as f64, 1) + " %",
+            swaps,
+            swapped,
+            fmt(quantile(&steps, 0.5), 3),
+            listed.join("; "),
         );
     }
     s

@@ -57,7 +57,8 @@ fn write_scenario_and_video(
 pub fn cmd_synth(args: &SynthArgs) -> Result<(), CliError> {
     let kind = match args.scenario {
         SynthScenario::Random => return synth_random(args),
-        SynthScenario::Several(kind) => return synth_several(kind, args),
+        SynthScenario::Several(kind) => return synth_several(Some(kind), args),
+        SynthScenario::SeveralRandom => return synth_several(None, args),
         SynthScenario::Described(kind) => kind,
     };
     if args.without.is_some() || args.only.is_some() {
@@ -98,40 +99,32 @@ pub fn cmd_synth(args: &SynthArgs) -> Result<(), CliError> {
 }
 
 /// `upetrack synth <several-ropes scene> <dir> [--frames N] [--seed S]
-/// [--without K] [--rope-prior]`: the ropes listed in `dlo.json`, each
+/// [--without K | --only K] [--rope-prior]`, or `synth several-random
+/// <dir> --seed S` (`kind` `None`): the ropes listed in `dlo.json`, each
 /// with its own ground-truth file.
-fn synth_several(kind: SeveralKind, args: &SynthArgs) -> Result<(), CliError> {
+fn synth_several(kind: Option<SeveralKind>, args: &SynthArgs) -> Result<(), CliError> {
     let refused = [
         ("count", args.count.is_some()),
         ("hd", args.hd),
         ("variant", args.variant.is_some()),
         ("y4m", args.y4m.is_some()),
+        ("without", kind.is_none() && args.without.is_some()),
+        ("only", kind.is_none() && args.only.is_some()),
     ];
     if let Some((name, _)) = refused.iter().find(|(_, given)| *given) {
         return Err(CliError::usage(format!(
-            "--{name} does not apply to a scene of several ropes (yet): its camera and ropes are the scene's"
+            "--{name} does not apply to this scene of several ropes: its camera and ropes are the scene's"
         )));
     }
     let frames = args.frames.map_or(DEFAULT_FRAMES, |n| n as usize);
-    let no_such = |option: &str, k: usize| {
-        CliError::usage(format!(
-            "--{option} {k}: {} has ropes 0 to {}",
-            kind.name(),
-            kind.rope_count() - 1
-        ))
+    let mut scene = match kind {
+        Some(kind) => described_several(kind, frames, args)?,
+        None => SeveralRopes::random(args.seed, frames),
     };
-    let scene = match (args.without, args.only) {
-        (Some(k), _) => SeveralRopes::without(kind, frames, args.seed, k)
-            .ok_or_else(|| no_such("without", k))?,
-        (None, Some(k)) => {
-            SeveralRopes::only(kind, frames, args.seed, k).ok_or_else(|| no_such("only", k))?
-        }
-        (None, None) => SeveralRopes::new(kind, frames, args.seed),
-    };
-    let mut scene = scene;
     scene.render.depth_noise_multiplier *= args.depth_noise.unwrap_or(1.0);
+    let label = scene.name.clone();
     let start = Instant::now();
-    let bar = progress::bar(frames as u64, "frames", kind.name());
+    let bar = progress::bar(frames as u64, "frames", label.clone());
     let dir = args.dir.as_path();
     let (prior, quality) = (args.rope_prior, args.jpeg_quality);
     let mut put = |(path, bytes): (String, Vec<u8>)| {
@@ -143,12 +136,35 @@ fn synth_several(kind: SeveralKind, args: &SynthArgs) -> Result<(), CliError> {
     let n = upetrack_io::synthetic_several::write_several(scene, prior, quality, &mut put)?;
     bar.finish_and_clear();
     eprintln!(
-        "{}: {n} frames of {} written in {:.1} s",
+        "{}: {n} frames of {label} written in {:.1} s",
         dir.display(),
-        kind.name(),
         start.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+/// A described scene of several ropes, whole or with `--without` or
+/// `--only` one rope.
+fn described_several(
+    kind: SeveralKind,
+    frames: usize,
+    args: &SynthArgs,
+) -> Result<SeveralRopes, CliError> {
+    let no_such = |option: &str, k: usize| {
+        CliError::usage(format!(
+            "--{option} {k}: {} has ropes 0 to {}",
+            kind.name(),
+            kind.rope_count() - 1
+        ))
+    };
+    Ok(match (args.without, args.only) {
+        (Some(k), _) => SeveralRopes::without(kind, frames, args.seed, k)
+            .ok_or_else(|| no_such("without", k))?,
+        (None, Some(k)) => {
+            SeveralRopes::only(kind, frames, args.seed, k).ok_or_else(|| no_such("only", k))?
+        }
+        (None, None) => SeveralRopes::new(kind, frames, args.seed),
+    })
 }
 
 /// Frames of a described scenario when `--frames` is absent.

@@ -20,6 +20,7 @@ pub mod render;
 pub mod rope;
 pub mod scenario;
 pub mod several;
+mod several_drawn;
 pub mod variant;
 
 pub use random::{RandomScene, SeedRange};

@@ -18,14 +18,15 @@ use crate::render::{
 };
 use crate::rope::{Obstacle, Rope, RopeSettings};
 use crate::scenario::SETTLING_FRAMES;
+use crate::several_drawn::{drawn_plan, DRAWN_STREAM};
 use crate::MAX_FRAMES;
 
 /// The blue of the single-rope scenarios.
-const BLUE: [f64; 3] = [0.08, 0.22, 0.55];
+pub(crate) const BLUE: [f64; 3] = [0.08, 0.22, 0.55];
 /// A red rope's albedo.
-const RED: [f64; 3] = [0.60, 0.10, 0.08];
+pub(crate) const RED: [f64; 3] = [0.60, 0.10, 0.08];
 /// A green rope's albedo.
-const GREEN: [f64; 3] = [0.10, 0.42, 0.14];
+pub(crate) const GREEN: [f64; 3] = [0.10, 0.42, 0.14];
 
 /// Length of each rope, metres (three fit side by side in view at 0.6 m).
 const ROPE_LENGTH: f64 = 0.42;
@@ -121,8 +122,8 @@ pub struct SeveralFrame {
 pub struct SeveralRopes {
     /// Its command-line name (with `-without-<k>` when a rope was left out).
     pub name: String,
-    /// Which scene.
-    pub kind: SeveralKind,
+    /// Which described scene (`None` for a drawn one).
+    pub kind: Option<SeveralKind>,
     /// Frames to record.
     pub frames: usize,
     /// Rendering settings (the camera; the rope colours are the ropes').
@@ -144,13 +145,13 @@ pub struct SeveralRopes {
 /// (clamped to its last) moved by `offset` from `start` to `end` (shares
 /// of the frames), from its settled position moved by `from` (where an
 /// earlier grasp of it left it; zero for the first).
-struct Grasp {
-    rope: usize,
-    particle: usize,
-    offset: Vec3,
-    start: f64,
-    end: f64,
-    from: Vec3,
+pub(crate) struct Grasp {
+    pub(crate) rope: usize,
+    pub(crate) particle: usize,
+    pub(crate) offset: Vec3,
+    pub(crate) start: f64,
+    pub(crate) end: f64,
+    pub(crate) from: Vec3,
 }
 
 /// Which of a scene's ropes are made.
@@ -163,12 +164,34 @@ enum Keep {
 }
 
 /// One rope of a scene before it is made: where it lies and how it looks.
-struct Laid {
-    shape: Vec<Vec3>,
-    color: [f64; 3],
-    name: &'static str,
+pub(crate) struct Laid {
+    pub(crate) shape: Vec<Vec3>,
+    pub(crate) color: [f64; 3],
+    pub(crate) name: String,
     /// Indices of the ropes (among those laid before it) it lies on.
-    over: &'static [usize],
+    pub(crate) over: Vec<usize>,
+    /// Length and diameter, metres.
+    pub(crate) length: f64,
+    pub(crate) thickness: f64,
+}
+
+/// A rope of the described scenes: [`ROPE_LENGTH`] by [`ROPE_THICKNESS`].
+fn laid(shape: Vec<Vec3>, color: [f64; 3], name: &str, over: &[usize]) -> Laid {
+    Laid {
+        shape,
+        color,
+        name: String::from(name),
+        over: over.to_vec(),
+        length: ROPE_LENGTH,
+        thickness: ROPE_THICKNESS,
+    }
+}
+
+/// What a scene is made of before it is made.
+pub(crate) struct Plan {
+    pub(crate) laid: Vec<Laid>,
+    pub(crate) grasps: Vec<Grasp>,
+    pub(crate) boxes: Vec<MovingBox>,
 }
 
 impl SeveralRopes {
@@ -195,199 +218,44 @@ impl SeveralRopes {
     fn build(kind: SeveralKind, frames: usize, seed: u64, chosen: Option<Keep>) -> Self {
         let frames = frames.clamp(1, MAX_FRAMES);
         let mut rng = SplitMix64::new(seed);
-        let at = |f: f64| ((frames as f64 * f) as usize).min(frames - 1);
         // Small seeded variation of the layout: a shift of the whole scene.
         let shift = Vec3::new(rng.range(-0.01, 0.01), rng.range(-0.01, 0.01), 0.0);
-        let line = |a: [f64; 2], b: [f64; 2], bow: f64| -> Vec<Vec3> {
-            (0..200)
-                .map(|i| {
-                    let t = i as f64 / 199.0;
-                    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-                    let len = libm::sqrt(dx * dx + dy * dy).max(1e-9);
-                    let off = bow * libm::sin(core::f64::consts::PI * t);
-                    Vec3::new(
-                        a[0] + dx * t - dy / len * off,
-                        a[1] + dy * t + dx / len * off,
-                        0.0,
-                    ) + shift
-                })
-                .collect()
-        };
-        let (laid, pulls, boxes): (Vec<Laid>, Vec<Grasp>, Vec<MovingBox>) = match kind {
-            SeveralKind::Crossing => (
-                alloc::vec![
-                    Laid {
-                        shape: line([-0.21, 0.0], [0.21, 0.02], 0.03),
-                        color: BLUE,
-                        name: "blue-a",
-                        over: &[]
-                    },
-                    Laid {
-                        shape: line([-0.07, -0.2], [-0.07, 0.2], -0.02),
-                        color: BLUE,
-                        name: "blue-b",
-                        over: &[0]
-                    },
-                ],
-                // Both ends of the upper rope, 14 cm along x.
-                alloc::vec![
-                    Grasp {
-                        rope: 1,
-                        particle: 0,
-                        offset: Vec3::new(0.14, 0.0, 0.0),
-                        start: 0.3,
-                        end: 0.85,
-                        from: Vec3::zeros(),
-                    },
-                    Grasp {
-                        rope: 1,
-                        particle: usize::MAX,
-                        offset: Vec3::new(0.14, 0.0, 0.0),
-                        start: 0.3,
-                        end: 0.85,
-                        from: Vec3::zeros(),
-                    },
-                ],
-                Vec::new(),
-            ),
-            SeveralKind::FromUnder => (
-                alloc::vec![
-                    Laid {
-                        shape: line([-0.11, 0.0], [0.26, 0.0], 0.03),
-                        color: BLUE,
-                        name: "blue-a",
-                        over: &[]
-                    },
-                    Laid {
-                        shape: line([0.14, -0.2], [0.14, 0.2], 0.02),
-                        color: BLUE,
-                        name: "blue-b",
-                        over: &[0]
-                    },
-                ],
-                // The lower rope's near end, 14 cm along its own axis: its
-                // far end passes under the upper rope and out.
-                alloc::vec![Grasp {
-                    rope: 0,
-                    particle: 0,
-                    offset: Vec3::new(-0.14, 0.0, 0.0),
-                    start: 0.3,
-                    end: 0.85,
-                    from: Vec3::zeros(),
-                }],
-                Vec::new(),
-            ),
-            SeveralKind::ThreeColours => (
-                alloc::vec![
-                    Laid {
-                        shape: line([-0.2, -0.09], [0.2, -0.07], 0.02),
-                        color: RED,
-                        name: "red",
-                        over: &[]
-                    },
-                    Laid {
-                        shape: line([-0.2, 0.04], [0.2, 0.05], -0.02),
-                        color: BLUE,
-                        name: "blue",
-                        over: &[]
-                    },
-                    Laid {
-                        shape: line([-0.12, -0.19], [0.1, 0.18], 0.02),
-                        color: GREEN,
-                        name: "green",
-                        over: &[0, 1]
-                    },
-                ],
-                alloc::vec![
-                    Grasp {
-                        rope: 0,
-                        particle: usize::MAX,
-                        offset: Vec3::new(0.0, -0.06, 0.0),
-                        start: 0.35,
-                        end: 0.85,
-                        from: Vec3::zeros(),
-                    },
-                    Grasp {
-                        rope: 1,
-                        particle: usize::MAX,
-                        offset: Vec3::new(0.0, 0.06, 0.0),
-                        start: 0.35,
-                        end: 0.85,
-                        from: Vec3::zeros(),
-                    },
-                    Grasp {
-                        rope: 2,
-                        particle: usize::MAX,
-                        offset: Vec3::new(0.06, 0.0, 0.0),
-                        start: 0.35,
-                        end: 0.85,
-                        from: Vec3::zeros(),
-                    },
-                ],
-                alloc::vec![MovingBox {
-                    first: at(0.3),
-                    last: at(0.7),
-                    shape: OccluderBox {
-                        min: Vec3::new(-0.24, -0.04, 0.08) + shift,
-                        max: Vec3::new(-0.17, 0.04, 0.12) + shift,
-                        color: None,
-                    },
-                    path: BoxPath::Linear {
-                        travel: Vec3::new(0.36, 0.0, 0.0),
-                        bob: 0.0,
-                        dwell: true,
-                    },
-                }],
-            ),
-            SeveralKind::LeavesView => {
-                let out = Vec3::new(0.34, 0.0, 0.0);
-                // Both ends of the second rope, out and back.
-                let grasps = [0, usize::MAX].into_iter().flat_map(|particle| {
-                    [
-                        Grasp {
-                            rope: 1,
-                            particle,
-                            offset: out,
-                            start: 0.15,
-                            end: 0.4,
-                            from: Vec3::zeros(),
-                        },
-                        Grasp {
-                            rope: 1,
-                            particle,
-                            offset: -out,
-                            start: 0.55,
-                            end: 0.8,
-                            from: out,
-                        },
-                    ]
-                });
-                (
-                    alloc::vec![
-                        Laid {
-                            shape: line([-0.06, -0.2], [-0.06, 0.2], 0.03),
-                            color: BLUE,
-                            name: "blue-a",
-                            over: &[]
-                        },
-                        Laid {
-                            shape: line([0.1, -0.2], [0.1, 0.2], -0.03),
-                            color: BLUE,
-                            name: "blue-b",
-                            over: &[]
-                        },
-                    ],
-                    grasps.collect(),
-                    Vec::new(),
-                )
-            }
-        };
-        let settings = RopeSettings {
-            length: ROPE_LENGTH,
-            thickness: ROPE_THICKNESS,
-            particles: 43,
-            ..RopeSettings::default()
-        };
+        let plan = described(kind, frames, shift);
+        let mut name = String::from(kind.name());
+        match chosen {
+            None => {}
+            Some(Keep::AllBut(k)) => name.push_str(&alloc::format!("-without-{k}")),
+            Some(Keep::Only(k)) => name.push_str(&alloc::format!("-only-{k}")),
+        }
+        Self::make(plan, name, Some(kind), frames, rng, chosen)
+    }
+
+    /// A scene of several ropes drawn whole from `seed`
+    /// ([`drawn_plan`]: two or three ropes, of one colour or of several,
+    /// crossing, dragged or pulled, a box passing or not).
+    pub fn random(seed: u64, frames: usize) -> Self {
+        let frames = frames.clamp(1, MAX_FRAMES);
+        let mut rng = SplitMix64::new(seed ^ DRAWN_STREAM);
+        let plan = drawn_plan(&mut rng, frames);
+        let name = alloc::format!("several-random-{seed}");
+        Self::make(plan, name, None, frames, rng, None)
+    }
+
+    fn make(
+        plan: Plan,
+        name: String,
+        kind: Option<SeveralKind>,
+        frames: usize,
+        rng: SplitMix64,
+        chosen: Option<Keep>,
+    ) -> Self {
+        let at = |f: f64| ((frames as f64 * f) as usize).min(frames - 1);
+        let Plan {
+            laid,
+            grasps: pulls,
+            boxes,
+        } = plan;
+
         let keep: Vec<usize> = (0..laid.len())
             .filter(|&k| match chosen {
                 None => true,
@@ -397,9 +265,16 @@ impl SeveralRopes {
             .collect();
         let mut ropes: Vec<Rope> = Vec::new();
         for &k in &keep {
+            let settings = RopeSettings {
+                length: laid[k].length,
+                thickness: laid[k].thickness,
+                // Particles about 1 cm apart.
+                particles: (libm::round(laid[k].length / 0.01) as usize + 1).max(3),
+                ..RopeSettings::default()
+            };
             let mut rope = Rope::laid_along(&laid[k].shape, settings);
             // Over the ropes it lies on: lifted onto them, then settled.
-            for &j in laid[k].over.iter().filter(|j| keep.contains(j)) {
+            for &j in laid[k].over.iter().filter(|j| keep.contains(*j)) {
                 let under = keep.iter().position(|&x| x == j).map(|i| &ropes[i]);
                 if let Some(under) = under {
                     lift_over(&mut rope, under);
@@ -434,19 +309,13 @@ impl SeveralRopes {
                 },
             )
             .collect();
-        let mut name = String::from(kind.name());
-        match chosen {
-            None => {}
-            Some(Keep::AllBut(k)) => name.push_str(&alloc::format!("-without-{k}")),
-            Some(Keep::Only(k)) => name.push_str(&alloc::format!("-only-{k}")),
-        }
         Self {
             name,
             kind,
             frames,
             render: RenderSettings::default(),
             colors: keep.iter().map(|&k| laid[k].color).collect(),
-            names: keep.iter().map(|&k| String::from(laid[k].name)).collect(),
+            names: keep.iter().map(|&k| laid[k].name.clone()).collect(),
             ropes,
             rng,
             next: 0,
@@ -562,6 +431,169 @@ impl SeveralRopes {
     pub fn remaining(&self) -> usize {
         self.frames - self.next
     }
+}
+
+/// The plan of a described scene of `frames` frames, shifted by `shift`.
+fn described(kind: SeveralKind, frames: usize, shift: Vec3) -> Plan {
+    let at = |f: f64| ((frames as f64 * f) as usize).min(frames - 1);
+    let line = |a: [f64; 2], b: [f64; 2], bow: f64| bowed(a, b, bow, shift);
+    let (laid, grasps, boxes): (Vec<Laid>, Vec<Grasp>, Vec<MovingBox>) = match kind {
+        SeveralKind::Crossing => (
+            alloc::vec![
+                laid(line([-0.21, 0.0], [0.21, 0.02], 0.03), BLUE, "blue-a", &[]),
+                laid(
+                    line([-0.07, -0.2], [-0.07, 0.2], -0.02),
+                    BLUE,
+                    "blue-b",
+                    &[0]
+                ),
+            ],
+            // Both ends of the upper rope, 14 cm along x.
+            alloc::vec![
+                Grasp {
+                    rope: 1,
+                    particle: 0,
+                    offset: Vec3::new(0.14, 0.0, 0.0),
+                    start: 0.3,
+                    end: 0.85,
+                    from: Vec3::zeros(),
+                },
+                Grasp {
+                    rope: 1,
+                    particle: usize::MAX,
+                    offset: Vec3::new(0.14, 0.0, 0.0),
+                    start: 0.3,
+                    end: 0.85,
+                    from: Vec3::zeros(),
+                },
+            ],
+            Vec::new(),
+        ),
+        SeveralKind::FromUnder => (
+            alloc::vec![
+                laid(line([-0.11, 0.0], [0.26, 0.0], 0.03), BLUE, "blue-a", &[]),
+                laid(line([0.14, -0.2], [0.14, 0.2], 0.02), BLUE, "blue-b", &[0]),
+            ],
+            // The lower rope's near end, 14 cm along its own axis: its
+            // far end passes under the upper rope and out.
+            alloc::vec![Grasp {
+                rope: 0,
+                particle: 0,
+                offset: Vec3::new(-0.14, 0.0, 0.0),
+                start: 0.3,
+                end: 0.85,
+                from: Vec3::zeros(),
+            }],
+            Vec::new(),
+        ),
+        SeveralKind::ThreeColours => (
+            alloc::vec![
+                laid(line([-0.2, -0.09], [0.2, -0.07], 0.02), RED, "red", &[]),
+                laid(line([-0.2, 0.04], [0.2, 0.05], -0.02), BLUE, "blue", &[]),
+                laid(
+                    line([-0.12, -0.19], [0.1, 0.18], 0.02),
+                    GREEN,
+                    "green",
+                    &[0, 1]
+                ),
+            ],
+            alloc::vec![
+                Grasp {
+                    rope: 0,
+                    particle: usize::MAX,
+                    offset: Vec3::new(0.0, -0.06, 0.0),
+                    start: 0.35,
+                    end: 0.85,
+                    from: Vec3::zeros(),
+                },
+                Grasp {
+                    rope: 1,
+                    particle: usize::MAX,
+                    offset: Vec3::new(0.0, 0.06, 0.0),
+                    start: 0.35,
+                    end: 0.85,
+                    from: Vec3::zeros(),
+                },
+                Grasp {
+                    rope: 2,
+                    particle: usize::MAX,
+                    offset: Vec3::new(0.06, 0.0, 0.0),
+                    start: 0.35,
+                    end: 0.85,
+                    from: Vec3::zeros(),
+                },
+            ],
+            alloc::vec![MovingBox {
+                first: at(0.3),
+                last: at(0.7),
+                shape: OccluderBox {
+                    min: Vec3::new(-0.24, -0.04, 0.08) + shift,
+                    max: Vec3::new(-0.17, 0.04, 0.12) + shift,
+                    color: None,
+                },
+                path: BoxPath::Linear {
+                    travel: Vec3::new(0.36, 0.0, 0.0),
+                    bob: 0.0,
+                    dwell: true,
+                },
+            }],
+        ),
+        SeveralKind::LeavesView => {
+            let out = Vec3::new(0.34, 0.0, 0.0);
+            // Both ends of the second rope, out and back.
+            let grasps = [0, usize::MAX].into_iter().flat_map(|particle| {
+                [
+                    Grasp {
+                        rope: 1,
+                        particle,
+                        offset: out,
+                        start: 0.15,
+                        end: 0.4,
+                        from: Vec3::zeros(),
+                    },
+                    Grasp {
+                        rope: 1,
+                        particle,
+                        offset: -out,
+                        start: 0.55,
+                        end: 0.8,
+                        from: out,
+                    },
+                ]
+            });
+            (
+                alloc::vec![
+                    laid(line([-0.06, -0.2], [-0.06, 0.2], 0.03), BLUE, "blue-a", &[]),
+                    laid(line([0.1, -0.2], [0.1, 0.2], -0.03), BLUE, "blue-b", &[]),
+                ],
+                grasps.collect(),
+                Vec::new(),
+            )
+        }
+    };
+    Plan {
+        laid,
+        grasps,
+        boxes,
+    }
+}
+
+/// 200 points from `a` to `b` (table plane, metres) bowed sideways by
+/// `bow` at the middle, shifted by `shift`.
+pub(crate) fn bowed(a: [f64; 2], b: [f64; 2], bow: f64, shift: Vec3) -> Vec<Vec3> {
+    (0..200)
+        .map(|i| {
+            let t = i as f64 / 199.0;
+            let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+            let len = libm::sqrt(dx * dx + dy * dy).max(1e-9);
+            let off = bow * libm::sin(core::f64::consts::PI * t);
+            Vec3::new(
+                a[0] + dx * t - dy / len * off,
+                a[1] + dy * t + dx / len * off,
+                0.0,
+            ) + shift
+        })
+        .collect()
 }
 
 /// One frame of physics for every rope, each beside the others as they
