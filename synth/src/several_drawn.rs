@@ -152,3 +152,48 @@ pub(crate) fn drawn_plan(rng: &mut SplitMix64, frames: usize) -> Plan {
         boxes,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::several::SeveralRopes;
+
+    #[test]
+    fn a_drawn_scene_of_several_ropes_is_the_same_for_a_seed_and_its_draws_cover_their_ranges() {
+        let (a, b) = (SeveralRopes::random(7, 3), SeveralRopes::random(7, 3));
+        assert_eq!(a.names, b.names);
+        assert_eq!(
+            a.ropes.iter().map(|r| r.x.clone()).collect::<Vec<_>>(),
+            b.ropes.iter().map(|r| r.x.clone()).collect::<Vec<_>>()
+        );
+        let (mut counts, mut one_colour, mut several, mut boxed, mut lengths, mut diameters) =
+            ([0usize; 4], 0, 0, 0, Vec::new(), Vec::new());
+        for seed in 0..200 {
+            let mut rng = SplitMix64::new(seed ^ DRAWN_STREAM);
+            let plan = drawn_plan(&mut rng, 48);
+            counts[plan.laid.len()] += 1;
+            if plan.laid.iter().all(|l| l.color == plan.laid[0].color) {
+                one_colour += 1;
+            } else {
+                several += 1;
+            }
+            boxed += usize::from(!plan.boxes.is_empty());
+            assert!(!plan.grasps.is_empty() && plan.grasps.len() <= 2);
+            lengths.extend(plan.laid.iter().map(|l| l.length));
+            diameters.extend(plan.laid.iter().map(|l| l.thickness));
+        }
+        assert!(counts[2] > 50 && counts[3] > 30, "{counts:?}");
+        assert!(one_colour > 60 && several > 60, "{one_colour} / {several}");
+        assert!(boxed > 60 && boxed < 140, "{boxed}");
+        let span = |v: &[f64]| {
+            (
+                v.iter().copied().fold(f64::INFINITY, f64::min),
+                v.iter().copied().fold(0.0, f64::max),
+            )
+        };
+        let (lo, hi) = span(&lengths);
+        assert!(lo < LENGTH_M.0 + 0.02 && hi > LENGTH_M.1 - 0.02, "{lo}..{hi}");
+        let (lo, hi) = span(&diameters);
+        assert!(lo < DIAMETER_M.0 + 0.001 && hi > DIAMETER_M.1 - 0.001, "{lo}..{hi}");
+    }
+}
