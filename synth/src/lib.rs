@@ -15,6 +15,7 @@ mod drawn;
 mod ease;
 mod events;
 mod layout;
+mod plan;
 pub mod random;
 pub mod render;
 pub mod rope;

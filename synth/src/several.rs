@@ -12,6 +12,7 @@ use upetrack::rng::SplitMix64;
 use upetrack::{CameraIntrinsics, HsvRange};
 
 use crate::events::{BoxPath, MovingBox, Pull};
+use crate::plan::{bowed, laid, Grasp, Laid, Plan, BLUE, GREEN, RED};
 use crate::render::{
     hidden_by_boxes, hidden_by_ropes, render_ropes, rope_hsv, CameraPose, OccluderBox,
     RenderSettings, RopeLook,
@@ -20,18 +21,6 @@ use crate::rope::{Obstacle, Rope, RopeSettings};
 use crate::scenario::SETTLING_FRAMES;
 use crate::several_drawn::{drawn_plan, DRAWN_STREAM};
 use crate::MAX_FRAMES;
-
-/// The blue of the single-rope scenarios.
-pub(crate) const BLUE: [f64; 3] = [0.08, 0.22, 0.55];
-/// A red rope's albedo.
-pub(crate) const RED: [f64; 3] = [0.60, 0.10, 0.08];
-/// A green rope's albedo.
-pub(crate) const GREEN: [f64; 3] = [0.10, 0.42, 0.14];
-
-/// Length of each rope, metres (three fit side by side in view at 0.6 m).
-const ROPE_LENGTH: f64 = 0.42;
-/// Diameter of each rope, metres.
-const ROPE_THICKNESS: f64 = 0.010;
 
 /// Which scene of several ropes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -141,19 +130,6 @@ pub struct SeveralRopes {
     boxes: Vec<MovingBox>,
 }
 
-/// A grasp of a scene being made: rope `rope`'s particle `particle`
-/// (clamped to its last) moved by `offset` from `start` to `end` (shares
-/// of the frames), from its settled position moved by `from` (where an
-/// earlier grasp of it left it; zero for the first).
-pub(crate) struct Grasp {
-    pub(crate) rope: usize,
-    pub(crate) particle: usize,
-    pub(crate) offset: Vec3,
-    pub(crate) start: f64,
-    pub(crate) end: f64,
-    pub(crate) from: Vec3,
-}
-
 /// Which of a scene's ropes are made.
 #[derive(Debug, Clone, Copy)]
 enum Keep {
@@ -161,37 +137,6 @@ enum Keep {
     AllBut(usize),
     /// This one alone.
     Only(usize),
-}
-
-/// One rope of a scene before it is made: where it lies and how it looks.
-pub(crate) struct Laid {
-    pub(crate) shape: Vec<Vec3>,
-    pub(crate) color: [f64; 3],
-    pub(crate) name: String,
-    /// Indices of the ropes (among those laid before it) it lies on.
-    pub(crate) over: Vec<usize>,
-    /// Length and diameter, metres.
-    pub(crate) length: f64,
-    pub(crate) thickness: f64,
-}
-
-/// A rope of the described scenes: [`ROPE_LENGTH`] by [`ROPE_THICKNESS`].
-fn laid(shape: Vec<Vec3>, color: [f64; 3], name: &str, over: &[usize]) -> Laid {
-    Laid {
-        shape,
-        color,
-        name: String::from(name),
-        over: over.to_vec(),
-        length: ROPE_LENGTH,
-        thickness: ROPE_THICKNESS,
-    }
-}
-
-/// What a scene is made of before it is made.
-pub(crate) struct Plan {
-    pub(crate) laid: Vec<Laid>,
-    pub(crate) grasps: Vec<Grasp>,
-    pub(crate) boxes: Vec<MovingBox>,
 }
 
 impl SeveralRopes {
@@ -230,8 +175,7 @@ impl SeveralRopes {
         Self::make(plan, name, Some(kind), frames, rng, chosen)
     }
 
-    /// A scene of several ropes drawn whole from `seed`
-    /// ([`drawn_plan`]: two or three ropes, of one colour or of several,
+    /// A scene of several ropes drawn whole from `seed` (two or three ropes, of one colour or of several,
     /// crossing, dragged or pulled, a box passing or not).
     pub fn random(seed: u64, frames: usize) -> Self {
         let frames = frames.clamp(1, MAX_FRAMES);
@@ -576,24 +520,6 @@ fn described(kind: SeveralKind, frames: usize, shift: Vec3) -> Plan {
         grasps,
         boxes,
     }
-}
-
-/// 200 points from `a` to `b` (table plane, metres) bowed sideways by
-/// `bow` at the middle, shifted by `shift`.
-pub(crate) fn bowed(a: [f64; 2], b: [f64; 2], bow: f64, shift: Vec3) -> Vec<Vec3> {
-    (0..200)
-        .map(|i| {
-            let t = i as f64 / 199.0;
-            let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-            let len = libm::sqrt(dx * dx + dy * dy).max(1e-9);
-            let off = bow * libm::sin(core::f64::consts::PI * t);
-            Vec3::new(
-                a[0] + dx * t - dy / len * off,
-                a[1] + dy * t + dx / len * off,
-                0.0,
-            ) + shift
-        })
-        .collect()
 }
 
 /// One frame of physics for every rope, each beside the others as they

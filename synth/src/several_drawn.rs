@@ -4,14 +4,15 @@
 //! and whether a box passes over them.
 
 use alloc::format;
+use alloc::string::String;
 use alloc::vec::Vec;
 
 use upetrack::math::Vec3;
 use upetrack::rng::SplitMix64;
 
 use crate::events::{BoxPath, MovingBox};
+use crate::plan::{bowed, Grasp, Laid, Plan, BLUE, GREEN, RED};
 use crate::render::OccluderBox;
-use crate::several::{bowed, Grasp, Laid, Plan, BLUE, GREEN, RED};
 
 /// Mixed into a seed for the drawn scenes of several ropes, so that they
 /// share no numbers with the single-rope scenes of the same seed.
@@ -81,7 +82,7 @@ pub(crate) fn drawn_plan(rng: &mut SplitMix64, frames: usize) -> Plan {
         let name = if one_colour {
             format!("{}-{}", names[0], (b'a' + k as u8) as char)
         } else {
-            format!("{}", names[colour])
+            String::from(names[colour])
         };
         laid.push(Laid {
             shape: bowed(
@@ -192,8 +193,14 @@ mod tests {
             )
         };
         let (lo, hi) = span(&lengths);
-        assert!(lo < LENGTH_M.0 + 0.02 && hi > LENGTH_M.1 - 0.02, "{lo}..{hi}");
+        assert!(
+            lo < LENGTH_M.0 + 0.02 && hi > LENGTH_M.1 - 0.02,
+            "{lo}..{hi}"
+        );
         let (lo, hi) = span(&diameters);
-        assert!(lo < DIAMETER_M.0 + 0.001 && hi > DIAMETER_M.1 - 0.001, "{lo}..{hi}");
+        assert!(
+            lo < DIAMETER_M.0 + 0.001 && hi > DIAMETER_M.1 - 0.001,
+            "{lo}..{hi}"
+        );
     }
 }
