@@ -437,16 +437,42 @@ impl Sequence {
             .collect()
     }
 
+    /// The names of the ropes `dlo.json` lists (`ropes`; one name for a
+    /// sequence of one rope).
+    #[getter]
+    fn ropes(&self) -> Vec<String> {
+        self.inner.ropes.iter().map(|r| r.name.clone()).collect()
+    }
+
     /// A tracker for this sequence (its camera, colour range and the rope
-    /// `dlo.json` describes), as the command builds it.
-    #[pyo3(signature = (params=None, algorithm=None))]
+    /// `dlo.json` describes), as the command builds it; with several ropes,
+    /// of rope `rope` alone (its colour, prior and hint: the other ropes'
+    /// pixels are not shared out, as `track` shares them).
+    #[pyo3(signature = (params=None, algorithm=None, rope=0))]
     fn tracker(
         &self,
         params: Option<&Bound<'_, PyAny>>,
         algorithm: Option<&str>,
+        rope: usize,
     ) -> PyResult<Tracker> {
         let params = algorithm_of(algorithm, params_of(params)?)?;
-        let inner = self.inner.tracker(params).map_err(tracker_error)?;
+        let count = self.inner.ropes.len();
+        let inner = match self.inner.ropes.get(rope) {
+            _ if count <= 1 && rope == 0 => self.inner.tracker(params).map_err(tracker_error)?,
+            Some(r) => {
+                let mut t = upetrack::Tracker::new(params, self.inner.camera, r.hsv)
+                    .map_err(tracker_error)?;
+                t.set_rope_prior(r.prior).map_err(tracker_error)?;
+                t.set_rope_hint(r.hint);
+                t
+            }
+            None => {
+                return Err(PyValueError::new_err(format!(
+                    "rope={rope}: the sequence has {count} rope(s), 0 to {}",
+                    count.saturating_sub(1)
+                )))
+            }
+        };
         Ok(Tracker {
             inner,
             depth_scale: self.inner.depth_scale,

@@ -26,9 +26,9 @@ def command():
 
 
 def untimed(result):
-    for f in result["frames"]:
-        f.pop("track_ms")
-        f.pop("total_ms")
+    for f in result["frames"] + [f for r in result.get("ropes", []) for f in r["frames"]]:
+        f.pop("track_ms", None)
+        f.pop("total_ms", None)
     return result
 
 
@@ -53,6 +53,29 @@ def test_track_writes_the_commands_result(tmp_path):
                     "--algorithm", "trackdlo"], check=True)
     text = upetrack.track(SAMPLE, out=ours, algorithm="trackdlo")
     assert untimed(json.loads(text)) == untimed(json.loads(ours.read_text()))
+    assert untimed(json.loads(ours.read_text())) == untimed(json.loads(theirs.read_text()))
+
+
+def test_a_sequence_of_several_ropes_names_them_tracks_each_and_track_writes_every_rope(tmp_path):
+    two = ROOT / "samples" / "two-ropes-crossing"
+    seq = upetrack.open(two)
+    assert seq.ropes == ["blue-a", "blue-b"]
+    assert upetrack.open(SAMPLE).ropes == ["rope-0"]
+    # Each rope alone: its colour and hint (the other rope's pixels not shared).
+    for k in (0, 1):
+        tracker = seq.tracker(rope=k)
+        color, depth = seq[0]
+        r = tracker.step(color, depth, occlusions=seq.occlusions_at(0))
+        assert not r.lost and r.nodes.shape == (24, 3)
+    with pytest.raises(ValueError, match="rope=2: the sequence has 2 rope"):
+        seq.tracker(rope=2)
+    # Together, as the command tracks them.
+    ours = tmp_path / "ours.json"
+    result = json.loads(upetrack.track(two, out=ours))
+    assert [r["name"] for r in result["ropes"]] == ["blue-a", "blue-b"]
+    assert result["ropes"][0]["frames"] == result["frames"]
+    theirs = tmp_path / "theirs.json"
+    subprocess.run([command(), "-q", "track", str(two), "--out", str(theirs)], check=True)
     assert untimed(json.loads(ours.read_text())) == untimed(json.loads(theirs.read_text()))
 
 

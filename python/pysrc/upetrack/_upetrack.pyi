@@ -112,7 +112,11 @@ class Sequence:
     def frames(self) -> Frames:
         """Every frame in order as (time, (color, depth))."""
     def occlusions_at(self, index: int) -> list[_Rect]: ...
-    def tracker(self, params: _Params = None, algorithm: Optional[str] = None) -> Tracker: ...
+    @property
+    def ropes(self) -> list[str]:
+        """The names of the ropes dlo.json lists (one name for one rope)."""
+    def tracker(self, params: _Params = None, algorithm: Optional[str] = None, rope: int = 0) -> Tracker:
+        """A tracker of this sequence's rope (with several ropes, rope `rope` alone; `track` tracks them together)."""
 
 def open(path: _Path, dlo: Optional[_Path] = None) -> Sequence:
     """Open a sequence folder, a .zip, or a recording (.bag, .db3, .mcap; dlo: its dlo.json)."""
