@@ -12,7 +12,7 @@ use std::time::Instant;
 use upetrack::perception::initialisation::RopePrior;
 use upetrack::{Frame, MultiTracker, Tracker};
 use upetrack_io::eval::quantile;
-use upetrack_io::run::run_frame;
+use upetrack_io::run::{run_frame, run_frame_several};
 use upetrack_synth::{Scenario, ScenarioKind, Variant};
 
 use crate::args::BenchArgs;
@@ -86,21 +86,16 @@ fn timed_several(
             .collect::<Result<Vec<_>, _>>()
             .map_err(input)?;
         let mut ropes = MultiTracker::new(trackers).map_err(input)?;
+        let start = Instant::now();
+        let mut now = move || start.elapsed().as_secs_f64() * 1000.0;
         for (rgb, depth, occ) in &p.frames {
             let frame = Frame::new(p.camera.width, p.camera.height, rgb, depth, p.depth_scale)
                 .map_err(|e| CliError::input(e.to_string()))?;
-            let t0 = Instant::now();
-            let masks = ropes.segment(&frame, occ).map_err(input)?;
-            let t1 = Instant::now();
-            let observations = ropes.observe(&frame, &masks, occ);
-            let t2 = Instant::now();
-            ropes.step(&frame, &masks, observations, occ);
-            let t3 = Instant::now();
-            let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1000.0;
-            t.segment.push(ms(t0, t1));
-            t.cloud.push(ms(t1, t2));
-            t.track.push(ms(t2, t3));
-            t.total.push(ms(t0, t3));
+            let rec = run_frame_several(&mut ropes, &frame, occ, &mut now).map_err(input)?;
+            t.segment.push(rec.segment_ms);
+            t.cloud.push(rec.cloud_ms);
+            t.track.push(rec.track_ms);
+            t.total.push(rec.total_ms);
         }
     }
     Ok(t)

@@ -4,6 +4,7 @@
 
 use std::path::Path;
 
+use crate::args::TableOutputs;
 use crate::CliError;
 
 /// The file in a cached sequence's folder that records what wrote it.
@@ -41,6 +42,29 @@ pub(crate) fn ensure_written(
         .map_err(|e| CliError::input(format!("{}: {e}", partial.display())))?;
     std::fs::rename(&partial, dir)
         .map_err(|e| CliError::input(format!("{}: {e}", dir.display())))?;
+    Ok(())
+}
+
+/// Prints a benchmark's table `text`, and writes `rows` where `--json`
+/// says, `text` where `--markdown` says and between the lines `markers` of
+/// the page `--update` names.
+pub(crate) fn publish<T: serde::Serialize>(
+    text: &str,
+    rows: &T,
+    outputs: &TableOutputs,
+    update: Option<&Path>,
+    (begin, end): (&str, &str),
+) -> Result<(), CliError> {
+    println!("{text}");
+    if let Some(p) = &outputs.json {
+        upetrack_io::write::write_json(p, rows)?;
+    }
+    if let Some(p) = &outputs.markdown {
+        upetrack_io::write::write_file(p, text.as_bytes())?;
+    }
+    if let Some(p) = update {
+        update_between(p, text, begin, end)?;
+    }
     Ok(())
 }
 

@@ -15,7 +15,7 @@ use upetrack_synth::random::{
 };
 use upetrack_synth::SIMULATOR_VERSION;
 
-use crate::bench_files::{ensure_written, update_between};
+use crate::bench_files::{ensure_written, publish};
 use crate::synth::{for_each_parallel, random_dir, write_random};
 use indicatif::ProgressBar;
 
@@ -309,25 +309,14 @@ pub fn run(
     rows.sort_by_key(|r| r.seed);
     draws.sort_by_key(|d| d.seed);
     let text = tables(range, &rows, &draws, algorithms);
-    println!("{text}");
-    if let Some(p) = &outputs.json {
-        upetrack_io::write::write_json(
-            p,
-            &RandomComparison {
-                range: range.name,
-                seeds,
-                frames,
-                rows,
-                draws,
-            },
-        )?;
-    }
-    if let Some(p) = &outputs.markdown {
-        upetrack_io::write::write_file(p, text.as_bytes())?;
-    }
-    if let Some(p) = update {
-        update_between(p, &text, BEGIN_MARKER, END_MARKER)?;
-    }
+    let all = RandomComparison {
+        range: range.name,
+        seeds,
+        frames,
+        rows,
+        draws,
+    };
+    publish(&text, &all, outputs, update, (BEGIN_MARKER, END_MARKER))?;
     Ok(())
 }
 

@@ -12,7 +12,7 @@ use upetrack_io::result::TrackResult;
 use upetrack_synth::{SeveralKind, SeveralRopes, SIMULATOR_VERSION};
 
 use crate::args::CompareArgs;
-use crate::bench_files::{ensure_written, update_between};
+use crate::bench_files::{ensure_written, publish};
 use crate::{fmt, open_sequence, pipeline, progress, with_algorithm, AnySequence, CliError};
 
 /// Lines of a page between which `--update` writes the table.
@@ -126,19 +126,25 @@ pub fn run(args: &CompareArgs, params: Params, algorithms: &[Algorithm]) -> Resu
         let dir = scene_dir(data, kind, "", frames);
         ensure_scene(&dir, kind, None, frames)?;
         let seq = open(&dir)?;
+        // Each rope alone: in the scene made without the others, and in
+        // the same images with only that rope in dlo.json.
+        let mut alone = Vec::new();
+        for k in 0..seq.ropes.len() {
+            let alone_dir = scene_dir(data, kind, &format!("-only{k}"), frames);
+            ensure_scene(&alone_dir, kind, Some(k), frames)?;
+            let same = with_one_rope(open(&dir)?, k)
+                .ok_or_else(|| CliError::input(format!("{}: no rope {k}", kind.name())))?;
+            alone.push((open(&alone_dir)?, same));
+        }
         for &a in algorithms {
             let p = with_algorithm(params, a);
             let (summaries, result) = track(&seq, kind.name(), p)?;
             let swaps = summaries.last().map_or(0, |s| s.identity_swaps);
             let steps: Vec<f64> = result.frames.iter().map(|f| f.track_ms).collect();
             let whole: Vec<f64> = result.frames.iter().map(|f| f.total_ms).collect();
-            for (k, rope) in seq.ropes.iter().enumerate() {
-                let alone_dir = scene_dir(data, kind, &format!("-only{k}"), frames);
-                ensure_scene(&alone_dir, kind, Some(k), frames)?;
-                let (alone, _) = track(&open(&alone_dir)?, kind.name(), p)?;
-                let same = with_one_rope(open(&dir)?, k)
-                    .ok_or_else(|| CliError::input(format!("{}: no rope {k}", kind.name())))?;
-                let (same, _) = track(&same, kind.name(), p)?;
+            for (k, (rope, (scene, images))) in seq.ropes.iter().zip(&alone).enumerate() {
+                let (scene, _) = track(scene, kind.name(), p)?;
+                let (images, _) = track(images, kind.name(), p)?;
                 let mine = summaries.get(k).ok_or_else(|| {
                     CliError::input(format!("{}: no row for rope {k}", kind.name()))
                 })?;
@@ -150,8 +156,8 @@ pub fn run(args: &CompareArgs, params: Params, algorithms: &[Algorithm]) -> Resu
                     mean_mm: mine.mm.mean,
                     max_mm: mine.max_mm,
                     lost_frames: mine.lost_frames,
-                    alone_scene_mm: mean_of(&alone),
-                    alone_images_mm: mean_of(&same),
+                    alone_scene_mm: mean_of(&scene),
+                    alone_images_mm: mean_of(&images),
                     identity_swaps: swaps,
                     step_ms: quantile(&steps, 0.5),
                     frame_ms: quantile(&whole, 0.5),
@@ -162,17 +168,14 @@ pub fn run(args: &CompareArgs, params: Params, algorithms: &[Algorithm]) -> Resu
     }
     bar.finish_and_clear();
     let text = markdown(&rows, frames);
-    println!("{text}");
-    if let Some(p) = &args.outputs.json {
-        upetrack_io::write::write_json(p, &rows)?;
-    }
-    if let Some(p) = &args.outputs.markdown {
-        upetrack_io::write::write_file(p, text.as_bytes())?;
-    }
-    if let Some(p) = &args.update {
-        update_between(p, &text, BEGIN_MARKER, END_MARKER)?;
-    }
-    Ok(())
+    let update = args.update.as_deref();
+    publish(
+        &text,
+        &rows,
+        &args.outputs,
+        update,
+        (BEGIN_MARKER, END_MARKER),
+    )
 }
 
 /// The table of `rows`.
@@ -311,20 +314,11 @@ fn run_drawn(
     bar.finish_and_clear();
     let mut rows = rows
         .into_inner()
-        .map_err(|_| CliError::input("a worker failed"))?;
+        .map_err(|_| CliError::internal("a worker thread panicked"))?;
     rows.sort_by(|a, b| (a.seed, &a.algorithm).cmp(&(b.seed, &b.algorithm)));
     let text = drawn_markdown(&rows, range_name, &seeds, frames, algorithms);
-    println!("{text}");
-    if let Some(p) = &args.outputs.json {
-        upetrack_io::write::write_json(p, &rows)?;
-    }
-    if let Some(p) = &args.outputs.markdown {
-        upetrack_io::write::write_file(p, text.as_bytes())?;
-    }
-    if let Some(p) = &args.update {
-        update_between(p, &text, DRAWN_BEGIN_MARKER, DRAWN_END_MARKER)?;
-    }
-    Ok(())
+    let markers = (DRAWN_BEGIN_MARKER, DRAWN_END_MARKER);
+    publish(&text, &rows, &args.outputs, args.update.as_deref(), markers)
 }
 
 /// Lines of a page between which `--update` writes the drawn table.

@@ -6,23 +6,10 @@ use alloc::vec::Vec;
 
 use nalgebra::SVector;
 
-use crate::math::{self, Vec2, Vec3};
+use crate::math::{Vec2, Vec3};
 use crate::perception::camera::CameraIntrinsics;
 
-/// Distance from `p` to the polyline through `curve` (Eq. 16). A one-point
-/// curve is that point; an empty curve gives `None`.
-pub fn distance_to_polyline<const D: usize>(
-    p: &SVector<f64, D>,
-    curve: &[SVector<f64, D>],
-) -> Option<f64> {
-    let first = curve.first()?;
-    let mut best = (p - first).norm_squared();
-    for w in curve.windows(2) {
-        let t = math::nearest_on_segment(p, &w[0], &w[1]);
-        best = best.min((p - (w[0] + (w[1] - w[0]) * t)).norm_squared());
-    }
-    Some(math::sqrt(best))
-}
+pub use crate::polyline::distance_to_polyline;
 
 /// `eps(A, B)` of Eq. 17: the mean over the nodes of `a` of their distance to
 /// PWL(`b`). `None` when either set is empty.

@@ -1,11 +1,29 @@
-//! Polyline geometry every stage shares: arc length, arc coordinates, and
+//! Polyline geometry every stage shares: distance to a polyline, arc
+//! length, arc coordinates, and
 //! `count` points evenly spaced by arc length along a polyline (the paper's
 //! Eq. 12-15 on the node polyline; initialisation places its nodes with it
 //! too).
 
 use alloc::vec::Vec;
 
+use nalgebra::SVector;
+
 use crate::math::{self, Vec3};
+
+/// Distance from `p` to the polyline through `curve` (Eq. 16). A one-point
+/// curve is that point; an empty curve gives `None`.
+pub fn distance_to_polyline<const D: usize>(
+    p: &SVector<f64, D>,
+    curve: &[SVector<f64, D>],
+) -> Option<f64> {
+    let first = curve.first()?;
+    let mut best = (p - first).norm_squared();
+    for w in curve.windows(2) {
+        let t = math::nearest_on_segment(p, &w[0], &w[1]);
+        best = best.min((p - (w[0] + (w[1] - w[0]) * t)).norm_squared());
+    }
+    Some(math::sqrt(best))
+}
 
 /// Arc length of the polyline (Eq. 12-13, `L`).
 pub fn polyline_length(points: &[Vec3]) -> f64 {

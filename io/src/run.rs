@@ -127,6 +127,58 @@ pub fn several_result(params: Params, ropes: Vec<(String, Vec<FrameRecord>)>) ->
     result
 }
 
+/// One frame of several ropes with the stages timed (as [`TimedFrame`]
+/// for one): segmentation (one mask per colour range), the sharing of
+/// pixels with every tracked rope's cloud, and every rope's step (with
+/// the initialisation of ropes not tracked).
+#[derive(Debug, Clone)]
+pub struct TimedFrames {
+    /// Each rope's colour mask.
+    pub masks: Vec<upetrack::perception::segmentation::Mask>,
+    /// Each rope's output, in order.
+    pub outputs: Vec<FrameOutput>,
+    /// Each rope's cloud as shared out to it (0 for a rope not tracked at
+    /// the frame's start).
+    pub cloud_points: Vec<usize>,
+    /// Segmentation, ms.
+    pub segment_ms: f64,
+    /// The sharing of pixels and the clouds, ms.
+    pub cloud_ms: f64,
+    /// Every rope's step, ms.
+    pub track_ms: f64,
+    /// All of it, ms.
+    pub total_ms: f64,
+}
+
+/// [`run_frame`] for several ropes (the one definition of their times).
+pub fn run_frame_several(
+    ropes: &mut MultiTracker,
+    frame: &upetrack::Frame<'_>,
+    occlusions: &[upetrack::Rect],
+    now_ms: &mut dyn FnMut() -> f64,
+) -> Result<TimedFrames, upetrack::tracker::TrackerError> {
+    let t0 = now_ms();
+    let masks = ropes.segment(frame, occlusions)?;
+    let t1 = now_ms();
+    let observations = ropes.observe(frame, &masks, occlusions);
+    let cloud_points = observations
+        .iter()
+        .map(|o| o.as_ref().map_or(0, |o| o.cloud.len()))
+        .collect();
+    let t2 = now_ms();
+    let outputs = ropes.step(frame, &masks, observations, occlusions);
+    let t3 = now_ms();
+    Ok(TimedFrames {
+        masks,
+        outputs,
+        cloud_points,
+        segment_ms: t1 - t0,
+        cloud_ms: t2 - t1,
+        track_ms: t3 - t2,
+        total_ms: t3 - t0,
+    })
+}
+
 /// Several ropes' records of one frame, timed as one: `total_ms` from the
 /// decoded images to every rope's step, `track_ms` every rope's step from
 /// the shared pixels' clouds (with the initialisation of ropes not
@@ -138,15 +190,10 @@ pub fn track_frame_several(
     occlusions: &[upetrack::Rect],
     now_ms: &mut dyn FnMut() -> f64,
 ) -> Result<Vec<FrameRecord>, upetrack::tracker::TrackerError> {
-    let t0 = now_ms();
-    let masks = ropes.segment(frame, occlusions)?;
-    let observations = ropes.observe(frame, &masks, occlusions);
-    let t1 = now_ms();
-    let outputs = ropes.step(frame, &masks, observations, occlusions);
-    let t2 = now_ms();
-    Ok(outputs
+    let t = run_frame_several(ropes, frame, occlusions, now_ms)?;
+    Ok(t.outputs
         .iter()
-        .map(|output| output_record(index, output, t2 - t1, t2 - t0))
+        .map(|output| output_record(index, output, t.track_ms, t.total_ms))
         .collect())
 }
 

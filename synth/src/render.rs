@@ -288,6 +288,22 @@ fn ray_box(rd: &Vec3, min: &Vec3, max: &Vec3) -> Option<(f64, Vec3)> {
     (t0 <= t1 && t0 > 0.0).then_some((t0, normal))
 }
 
+/// `true` when something `hits` (given the ray from the camera, relative
+/// to its centre, and the origin it is taken from) is hit along the line
+/// of sight to the near side of the rope at `point` (world frame, radius
+/// `radius`) before it: `hits(dir, centre, before)`.
+fn hidden_by(
+    settings: &RenderSettings,
+    point: &Vec3,
+    radius: f64,
+    hits: impl Fn(&Vec3, &Vec3, f64) -> bool,
+) -> bool {
+    let pose = settings.pose();
+    let to = point - pose.centre;
+    let dist = math::norm(&to);
+    dist > radius && hits(&(to / dist), &pose.centre, dist - radius)
+}
+
 /// `true` when a box lies between the camera and the near side of the rope
 /// at `point` (world frame, rope radius `radius`).
 pub fn hidden_by_boxes(
@@ -296,16 +312,10 @@ pub fn hidden_by_boxes(
     radius: f64,
     boxes: &[OccluderBox],
 ) -> bool {
-    let pose = settings.pose();
-    let to = point - pose.centre;
-    let dist = math::norm(&to);
-    if !(dist > radius) {
-        return false;
-    }
-    let dir = to / dist;
-    boxes.iter().any(|b| {
-        ray_box(&dir, &(b.min - pose.centre), &(b.max - pose.centre))
-            .is_some_and(|(t, _)| t < dist - radius)
+    hidden_by(settings, point, radius, |dir, centre, before| {
+        boxes.iter().any(|b| {
+            ray_box(dir, &(b.min - centre), &(b.max - centre)).is_some_and(|(t, _)| t < before)
+        })
     })
 }
 
@@ -319,17 +329,12 @@ pub fn hidden_by_ropes(
     radius: f64,
     others: &[RopeLook<'_>],
 ) -> bool {
-    let pose = settings.pose();
-    let to = point - pose.centre;
-    let dist = math::norm(&to);
-    if !(dist > radius) {
-        return false;
-    }
-    let dir = to / dist;
-    others.iter().any(|o| {
-        o.particles.windows(2).any(|s| {
-            ray_capsule(&dir, &(s[0] - pose.centre), &(s[1] - pose.centre), o.radius)
-                .is_some_and(|(t, _)| t < dist - radius)
+    hidden_by(settings, point, radius, |dir, centre, before| {
+        others.iter().any(|o| {
+            o.particles.windows(2).any(|s| {
+                ray_capsule(dir, &(s[0] - centre), &(s[1] - centre), o.radius)
+                    .is_some_and(|(t, _)| t < before)
+            })
         })
     })
 }

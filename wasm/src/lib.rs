@@ -148,8 +148,8 @@ pub struct WasmTracker {
     names: Vec<String>,
     /// The first rope's last observation (one rope).
     last_obs: Option<Observation>,
-    /// The union of the ropes' colour masks of the last frame (several).
-    last_masks: Option<Vec<u8>>,
+    /// The ropes' colour masks of the last frame (several).
+    last_masks: Option<Vec<upetrack::perception::segmentation::Mask>>,
     /// Every rope's last output.
     last: Vec<FrameOutput>,
 }
@@ -474,8 +474,15 @@ impl WasmTracker {
     /// every rope's colour).
     #[wasm_bindgen(js_name = lastMask)]
     pub fn last_mask(&self) -> Vec<u8> {
-        if let Some(union) = &self.last_masks {
-            return union.clone();
+        if let Some(masks) = &self.last_masks {
+            // Every rope's colour, made only when the page asks for it.
+            let mut union = vec![0u8; masks.first().map_or(0, |m| m.data.len())];
+            for m in masks {
+                for (u, &b) in union.iter_mut().zip(&m.data) {
+                    *u |= b as u8;
+                }
+            }
+            return union;
         }
         self.last_obs
             .as_ref()

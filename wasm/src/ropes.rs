@@ -2,9 +2,10 @@
 //! result in a frame, and each rope of an opened sequence.
 
 use serde::{Deserialize, Serialize};
+use upetrack::tracker::FrameOutput;
 use upetrack::{Frame, HsvRange, Rect, Vec3};
 use upetrack_io::result::FrameRecord;
-use upetrack_io::run::output_record;
+use upetrack_io::run::{output_record, run_frame_several};
 use upetrack_io::sequence::RopeConfig;
 use wasm_bindgen::prelude::*;
 
@@ -38,25 +39,17 @@ pub(crate) struct RopeFrame {
 
 impl WasmTracker {
     /// One frame of several ropes: the first rope's result with every
-    /// rope's in `ropes`, timed as `upetrack_io::run::track_frame_several`.
+    /// rope's in `ropes`, timed by `upetrack_io::run::run_frame_several`.
     pub(crate) fn track_several(
         &mut self,
         frame: &Frame<'_>,
         rects: &[Rect],
     ) -> Result<FrameResult, JsError> {
-        let t0 = now_ms();
-        let masks = self.ropes.segment(frame, rects).map_err(js_err)?;
-        let segmented = now_ms();
-        let observations = self.ropes.observe(frame, &masks, rects);
-        let cloud_points = observations
-            .first()
-            .and_then(|o| o.as_ref())
-            .map_or(0, |o| o.cloud.len() as u32);
-        let t1 = now_ms();
-        let outputs = self.ropes.step(frame, &masks, observations, rects);
-        let t2 = now_ms();
+        let t = run_frame_several(&mut self.ropes, frame, rects, &mut now_ms).map_err(js_err)?;
+        let record = |out: &FrameOutput| output_record(0, out, t.track_ms, t.total_ms);
         let camera = *self.ropes.first().camera();
-        let ropes: Vec<RopeFrame> = outputs
+        let ropes: Vec<RopeFrame> = t
+            .outputs
             .iter()
             .zip(&self.names)
             .map(|(out, name)| {
@@ -68,11 +61,12 @@ impl WasmTracker {
                     visible: out.visible.clone(),
                     status: status.into(),
                     reason,
-                    record: output_record(0, out, t2 - t1, t2 - t0),
+                    record: record(out),
                 }
             })
             .collect();
-        let first = outputs
+        let first = t
+            .outputs
             .first()
             .ok_or_else(|| JsError::new("no rope tracked"))?;
         let (status, reason) = status_of(first);
@@ -82,24 +76,18 @@ impl WasmTracker {
             visible: first.visible.iter().map(|&v| v as u8).collect(),
             status: status.into(),
             reason,
-            segment_ms: segmented - t0,
-            cloud_ms: t1 - segmented,
-            track_ms: t2 - t1,
-            total_ms: t2 - t0,
-            cloud_points,
+            segment_ms: t.segment_ms,
+            cloud_ms: t.cloud_ms,
+            track_ms: t.track_ms,
+            total_ms: t.total_ms,
+            cloud_points: t.cloud_points.first().map_or(0, |&n| n as u32),
             init: first.init.clone(),
-            record: output_record(0, first, t2 - t1, t2 - t0),
+            record: record(first),
             ropes,
         };
-        let mut union = vec![0u8; frame.width as usize * frame.height as usize];
-        for m in &masks {
-            for (u, &b) in union.iter_mut().zip(&m.data) {
-                *u |= b as u8;
-            }
-        }
-        self.last_masks = Some(union);
+        self.last_masks = Some(t.masks);
         self.last_obs = None;
-        self.last = outputs;
+        self.last = t.outputs;
         Ok(result)
     }
 }

@@ -24,10 +24,22 @@ pub fn run(args: &[&str]) -> std::process::Output {
         .expect("run upetrack")
 }
 
+/// Runs the command with `args`, which must succeed (else its error is
+/// the failure), and returns its output.
+pub fn run_ok(args: &[&str]) -> std::process::Output {
+    let out = run(args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
 /// Writes `frames` frames of `scenario` (seed 3) into `dir` with `upetrack synth`.
 pub fn synth(scenario: &str, frames: usize, dir: &std::path::Path) {
     let dir = dir.to_str().expect("utf-8");
-    let out = run(&[
+    run_ok(&[
         "synth",
         scenario,
         dir,
@@ -36,11 +48,6 @@ pub fn synth(scenario: &str, frames: usize, dir: &std::path::Path) {
         "--seed",
         "3",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
 }
 
 /// Drawn scene `seed` of the randomised benchmark written with
@@ -50,14 +57,9 @@ pub fn written_drawn_scene(seed: u64, frames: usize) -> (Sequence<FolderSource>,
     let dir = temp_dir("drawn", &seed.to_string());
     let (seed, frames) = (seed.to_string(), frames.to_string());
     let path = dir.to_str().expect("utf-8");
-    let out = run(&[
+    run_ok(&[
         "synth", "random", path, "--seed", &seed, "--frames", &frames,
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let scene = std::fs::read_to_string(dir.join("scene.json")).expect("scene.json");
     let draw: serde_json::Value = serde_json::from_str(&scene).expect("json");
     let length = draw["rope"]["length_m"].as_f64().expect("rope length");

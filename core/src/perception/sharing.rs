@@ -17,7 +17,8 @@ use super::camera::CameraIntrinsics;
 use super::frame::Frame;
 use super::initialisation::TakenRope;
 use super::segmentation::Mask;
-use crate::math::{nearest_on_segment, Vec2, Vec3};
+use crate::math::{Vec2, Vec3};
+use crate::polyline::distance_to_polyline;
 
 /// Most ropes whose pixels are shared (one bit each per pixel).
 pub const MAX_SHARED: usize = 8;
@@ -172,7 +173,7 @@ fn owner_of(
             let line = lines.get(k).copied().flatten()?;
             let d = match (point, windows[k].as_ref()) {
                 (Some(p), _) => axes[k].as_ref()?.surface_distance_from(&p, &mut starts[k]),
-                (None, Some(win)) => win.distance_in_image(Vec2::new(u, v), &line, camera),
+                (None, Some(win)) => win.distance_in_image(Vec2::new(u, v), line.radius),
                 (None, None) => return None,
             };
             Some((k, d))
@@ -270,6 +271,8 @@ struct Window {
     pieces: Vec<(Vec2, Vec2)>,
     /// Metres per pixel at the rope's nearest node.
     metres_per_px: f64,
+    /// The rope's nodes projected into the image.
+    projected: Vec<Vec2>,
 }
 
 impl Window {
@@ -308,6 +311,7 @@ impl Window {
             max,
             pieces,
             metres_per_px: nearest / focal,
+            projected,
         })
     }
 
@@ -318,24 +322,9 @@ impl Window {
 
     /// For a pixel without depth: its distance in the image to the rope's
     /// projected surface, in metres at the rope's nearest node.
-    fn distance_in_image(&self, q: Vec2, line: &RopeLine<'_>, camera: &CameraIntrinsics) -> f64 {
-        let projected: Vec<Vec2> = line
-            .nodes
-            .iter()
-            .filter_map(|p| camera.project(p))
-            .collect();
-        let px = match projected.as_slice() {
-            [] => return f64::INFINITY,
-            [only] => (q - only).norm(),
-            nodes => nodes
-                .windows(2)
-                .map(|s| {
-                    let t = nearest_on_segment(&q, &s[0], &s[1]);
-                    (q - (s[0] + (s[1] - s[0]) * t)).norm()
-                })
-                .fold(f64::INFINITY, f64::min),
-        };
-        px * self.metres_per_px - line.radius
+    fn distance_in_image(&self, q: Vec2, radius: f64) -> f64 {
+        distance_to_polyline(&q, &self.projected)
+            .map_or(f64::INFINITY, |px| px * self.metres_per_px - radius)
     }
 }
 
@@ -410,6 +399,17 @@ mod tests {
         }
     }
 
+    /// A straight rope of 12 nodes along x from -0.1 to 0.1 m, at `y` and
+    /// depth `z`.
+    fn along_x(y: f64, z: f64) -> Vec<Vec3> {
+        segment(Vec3::new(-0.1, y, z), Vec3::new(0.1, y, z), 12)
+    }
+
+    /// A tracked rope of radius `r` through `nodes`.
+    fn tracked(nodes: &[Vec3], r: f64) -> Option<RopeLine<'_>> {
+        Some(RopeLine { nodes, radius: r })
+    }
+
     fn segment(a: Vec3, b: Vec3, count: usize) -> Vec<Vec3> {
         (0..count)
             .map(|i| a + (b - a) * (i as f64 / (count - 1) as f64))
@@ -442,28 +442,11 @@ mod tests {
     #[test]
     fn two_parallel_ropes_a_centimetre_apart_each_keep_their_own_pixels() {
         let r = 0.003;
-        let a = segment(
-            Vec3::new(-0.1, -0.005, 0.597),
-            Vec3::new(0.1, -0.005, 0.597),
-            12,
-        );
-        let b = segment(
-            Vec3::new(-0.1, 0.005, 0.597),
-            Vec3::new(0.1, 0.005, 0.597),
-            12,
-        );
+        let a = along_x(-0.005, 0.597);
+        let b = along_x(0.005, 0.597);
         let scene = Scene::new(&[(&a, r), (&b, r)]);
         let frame = scene.frame();
-        let lines = [
-            Some(RopeLine {
-                nodes: &a,
-                radius: r,
-            }),
-            Some(RopeLine {
-                nodes: &b,
-                radius: r,
-            }),
-        ];
+        let lines = [tracked(&a, r), tracked(&b, r)];
         let shares = share_pixels(&frame, &camera(), &[&scene.mask, &scene.mask], &lines, 0.04);
         let total = scene.mask.count();
         let (na, nb) = (shares[0].own.count(), shares[1].own.count());
@@ -478,20 +461,11 @@ mod tests {
     fn at_a_crossing_the_pixels_go_to_the_rope_on_top() {
         let r = 0.004;
         // `top` crosses over `under`, a diameter nearer the camera.
-        let under = segment(Vec3::new(-0.1, 0.0, 0.596), Vec3::new(0.1, 0.0, 0.596), 12);
+        let under = along_x(0.0, 0.596);
         let top = segment(Vec3::new(0.0, -0.1, 0.588), Vec3::new(0.0, 0.1, 0.588), 12);
         let scene = Scene::new(&[(&under, r), (&top, r)]);
         let frame = scene.frame();
-        let lines = [
-            Some(RopeLine {
-                nodes: &under,
-                radius: r,
-            }),
-            Some(RopeLine {
-                nodes: &top,
-                radius: r,
-            }),
-        ];
+        let lines = [tracked(&under, r), tracked(&top, r)];
         let shares = share_pixels(&frame, &camera(), &[&scene.mask, &scene.mask], &lines, 0.04);
         let cam = camera();
         let centre = cam.project(&Vec3::new(0.0, 0.0, 0.588)).expect("in view");
@@ -513,27 +487,13 @@ mod tests {
     #[test]
     fn pixels_far_from_every_tracked_rope_are_left_to_all_of_its_colour() {
         let r = 0.003;
-        let a = segment(
-            Vec3::new(-0.1, -0.05, 0.597),
-            Vec3::new(0.1, -0.05, 0.597),
-            12,
-        );
-        let b = segment(
-            Vec3::new(-0.1, 0.05, 0.597),
-            Vec3::new(0.1, 0.05, 0.597),
-            12,
-        );
+        let a = along_x(-0.05, 0.597);
+        let b = along_x(0.05, 0.597);
         let scene = Scene::new(&[(&a, r), (&b, r)]);
         let frame = scene.frame();
         // Only `a` is tracked: `b`'s pixels are free for the second rope,
         // and for `a` too (as clutter), but `a`'s are `a`'s alone.
-        let lines = [
-            Some(RopeLine {
-                nodes: &a,
-                radius: r,
-            }),
-            None,
-        ];
+        let lines = [tracked(&a, r), None];
         let shares = share_pixels(&frame, &camera(), &[&scene.mask, &scene.mask], &lines, 0.04);
         let at = |p: &Vec3| {
             let q = camera().project(p).expect("in view");
@@ -559,16 +519,8 @@ mod tests {
     #[test]
     fn a_pixel_goes_to_the_nearest_rope_and_serves_it_only_in_its_colour() {
         let r = 0.003;
-        let a = segment(
-            Vec3::new(-0.1, -0.005, 0.597),
-            Vec3::new(0.1, -0.005, 0.597),
-            12,
-        );
-        let b = segment(
-            Vec3::new(-0.1, 0.005, 0.597),
-            Vec3::new(0.1, 0.005, 0.597),
-            12,
-        );
+        let a = along_x(-0.005, 0.597);
+        let b = along_x(0.005, 0.597);
         let both = Scene::new(&[(&a, r), (&b, r)]);
         let frame = both.frame();
         // Rope `a`'s colour range takes every rope pixel (a range picked
@@ -578,16 +530,7 @@ mod tests {
         for (i, p) in narrow.data.iter_mut().enumerate() {
             *p &= (i % W as usize) >= (W / 2) as usize;
         }
-        let lines = [
-            Some(RopeLine {
-                nodes: &a,
-                radius: r,
-            }),
-            Some(RopeLine {
-                nodes: &b,
-                radius: r,
-            }),
-        ];
+        let lines = [tracked(&a, r), tracked(&b, r)];
         let shares = share_pixels(&frame, &camera(), &[&wide, &narrow], &lines, 0.04);
         // `b`'s pixels of the left half, which only `a`'s range accepts,
         // are still not `a`'s: `a` keeps its own side only.
@@ -601,23 +544,10 @@ mod tests {
         assert!(shares[0].own.count() * 10 > both.mask.count() * 4);
         assert!(shares[1].own.count() * 10 > both.mask.count() * 2);
         // Ropes of colours that never meet keep their whole colour masks.
-        let far = segment(
-            Vec3::new(-0.1, 0.05, 0.597),
-            Vec3::new(0.1, 0.05, 0.597),
-            12,
-        );
+        let far = along_x(0.05, 0.597);
         let (scene_a, scene_far) = (Scene::new(&[(&a, r)]), Scene::new(&[(&far, r)]));
         let apart = Scene::new(&[(&a, r), (&far, r)]);
-        let lines = [
-            Some(RopeLine {
-                nodes: &a,
-                radius: r,
-            }),
-            Some(RopeLine {
-                nodes: &far,
-                radius: r,
-            }),
-        ];
+        let lines = [tracked(&a, r), tracked(&far, r)];
         let frame = apart.frame();
         let shares = share_pixels(
             &frame,

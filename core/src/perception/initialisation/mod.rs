@@ -37,7 +37,7 @@ use super::frame::Frame;
 use super::point_cloud::{CloudSettings, SURFACE_TO_AXIS_RATIO};
 use super::segmentation::Mask;
 use crate::math::{Vec2, Vec3};
-use crate::polyline::{polyline_length, resample_uniform};
+use crate::polyline::{distance_to_polyline, polyline_length, resample_uniform};
 
 /// Fewest pixels on a centre line worth initialising from.
 pub const MIN_CENTRE_LINE_PIXELS: usize = 8;
@@ -105,15 +105,14 @@ impl TakenRope {
     /// ropes' axes are never closer than the sum of their radii, except
     /// where one crosses over the other.
     pub fn covers(&self, points: &[Vec2]) -> bool {
+        // A rope seen at one point has no axis to lie along.
+        if self.line.len() < 2 {
+            return false;
+        }
         let reach = self.radius_px.max(MIN_TAKEN_REACH_PX);
         let on = points
             .iter()
-            .filter(|p| {
-                self.line.windows(2).any(|s| {
-                    let t = crate::math::nearest_on_segment(*p, &s[0], &s[1]);
-                    (*p - (s[0] + (s[1] - s[0]) * t)).norm() <= reach
-                })
-            })
+            .filter(|p| distance_to_polyline(*p, &self.line).is_some_and(|d| d <= reach))
             .count();
         2 * on > points.len()
     }
