@@ -114,7 +114,7 @@ impl Default for Params {
             min_blob_pixels: 150,
             reinit_length_fraction: 0.8,
             reinit_visible_fraction: 0.5,
-            follow_camera: false,
+            follow_camera: true,
             upetrack: UpeTrackParams::default(),
             algorithm: Algorithm::Upetrack,
             cpd: CpdSettings::default(),
@@ -151,6 +151,7 @@ impl Params {
                 follow_shared_motion: false,
                 ..upe
             },
+            follow_camera: false,
             ..Self::default()
         }
     }

@@ -10,6 +10,7 @@
 //! nearly all pixels that decide side with it, so a still camera reads
 //! still.
 
+use alloc::vec;
 use alloc::vec::Vec;
 
 use nalgebra::{Matrix3, SMatrix, SVector};
@@ -103,11 +104,11 @@ const MIN_BRIGHTNESS_SIGMA: f64 = 0.5;
 const MIN_DEPTH_SIGMA: f64 = 0.0005;
 /// A block's depths agree (one surface) when their spread is within this
 /// share of their mean.
-const DEPTH_AGREEMENT: f32 = 0.02;
+pub(crate) const DEPTH_AGREEMENT: f32 = 0.02;
 /// The chi-square of six degrees of freedom at 0.999: how much better (in
 /// units of the residuals' variance) the motion must explain the images
 /// than no motion to be taken.
-const SIGNIFICANCE: f64 = 22.46;
+pub(crate) const SIGNIFICANCE: f64 = 22.46;
 /// Ridge on the normal equations, relative to their mean curvature: what
 /// the background leaves undetermined (a flat, plain table's slide) is
 /// taken as no motion.
@@ -498,25 +499,47 @@ fn templates(level: &Level, noise: f64, plane: &Plane, focal: f64) -> Vec<Templa
         on(u, v) && on(u - 1, v) && on(u + 1, v) && on(u, v - 1) && on(u, v + 1)
     };
     let mut out = Vec::new();
+    // Each band of cells is read row by row: a row's squared gradients
+    // (-1 where not valid) in one pass, then each cell's part of the row
+    // by its maximum; a cell's strongest is the first pixel in reading
+    // order with the largest value, its first the first valid one.
+    let columns: Vec<usize> = (1..w - 1).step_by(cell).collect();
+    let mut row = vec![0.0f32; w];
+    let mut strongest = vec![(-1.0f32, (0, 0)); columns.len()];
+    let mut firsts: Vec<Option<(usize, usize)>> = vec![None; columns.len()];
     for cv in (1..h - 1).step_by(cell) {
-        for cu in (1..w - 1).step_by(cell) {
-            let (rows, columns) = (cv..(cv + cell).min(h - 1), cu..(cu + cell).min(w - 1));
-            // The cell's strongest valid pixel and its first: when these
-            // are on the plane (nearly always) they are the answer, found
-            // without asking every pixel.
-            let (mut strongest, mut at, mut first) = (-1.0f32, (0, 0), None);
-            for v in rows.clone() {
-                for u in columns.clone() {
-                    let i = v * w + u;
-                    let g = if valid(i) { g2(i) } else { -1.0 };
-                    if g >= 0.0 && first.is_none() {
-                        first = Some((u, v));
-                    }
-                    if g > strongest {
-                        (strongest, at) = (g, (u, v));
+        let rows = cv..(cv + cell).min(h - 1);
+        strongest.fill((-1.0, (0, 0)));
+        firsts.fill(None);
+        for v in rows.clone() {
+            let line = v * w..(v + 1) * w;
+            let (bg, depth) = (&level.background[line.clone()], &level.depth[line.clone()]);
+            let (gx, gy) = (&level.gx[line.clone()], &level.gy[line]);
+            // Branch-free, so that the pass is vectorised.
+            let pixels = bg.iter().zip(depth).zip(gx.iter().zip(gy));
+            for (g, ((&b, &z), (&x, &y))) in row.iter_mut().zip(pixels) {
+                let valid = b & (z > 0.0);
+                let g2 = x * x + y * y;
+                *g = if valid { g2 } else { -1.0 };
+            }
+            for ((&cu, best), first) in columns.iter().zip(&mut strongest).zip(&mut firsts) {
+                let part = &row[cu..(cu + cell).min(w - 1)];
+                let most = part.iter().fold(-1.0f32, |m, &g| if g > m { g } else { m });
+                if most > best.0 {
+                    if let Some(k) = part.iter().position(|&g| g == most) {
+                        *best = (most, (cu + k, v));
                     }
                 }
+                if first.is_none() && most >= 0.0 {
+                    *first = part.iter().position(|&g| g >= 0.0).map(|k| (cu + k, v));
+                }
             }
+        }
+        for ((&cu, &(strongest, at)), &first) in columns.iter().zip(&strongest).zip(&firsts) {
+            let columns = cu..(cu + cell).min(w - 1);
+            // When the cell's strongest valid pixel and its first are on
+            // the plane (nearly always) they are the answer, found without
+            // asking every pixel.
             let strongest = (strongest >= 0.0).then_some((strongest, at.0, at.1));
             let mut best = strongest.filter(|&(g, u, v)| g >= floor2 && stencil(u, v));
             let mut plain = first.filter(|&(u, v)| on(u, v));
@@ -895,12 +918,14 @@ pub fn camera_motion(earlier: &BackgroundView, later: &BackgroundView) -> Option
 }
 
 #[cfg(test)]
-mod tests {
+/// Test scenes of a table seen by a moving camera, for the motion
+/// estimate's tests and the glance's.
+pub(crate) mod fixture {
     use super::*;
     use crate::rng::SplitMix64;
     use alloc::vec;
 
-    const CAMERA: CameraIntrinsics = CameraIntrinsics {
+    pub(crate) const CAMERA: CameraIntrinsics = CameraIntrinsics {
         width: 320,
         height: 240,
         fx: 300.0,
@@ -911,7 +936,7 @@ mod tests {
 
     /// A table's brightness at world `(x, y)` (metres): value noise (a
     /// hashed lattice, interpolated) at 4 cm and 1 cm, or plain grey.
-    fn table(x: f64, y: f64, textured: bool) -> f64 {
+    pub(crate) fn table(x: f64, y: f64, textured: bool) -> f64 {
         if !textured {
             return 128.0;
         }
@@ -934,7 +959,7 @@ mod tests {
     /// Colour and depth of the table plane `z = 0` seen from a camera at
     /// `centre` looking down, turned by `turn` (a rotation vector), with
     /// `noise` grey levels of noise, and a `thing` moving on its own.
-    fn view(
+    pub(crate) fn view(
         centre: Vec3,
         turn: Vec3,
         textured: bool,
@@ -982,24 +1007,30 @@ mod tests {
     /// Something textured moving on its own: pixel `columns` and `rows`,
     /// moved `shift` pixels along the rows, `lift` metres above the table.
     #[derive(Clone)]
-    struct Thing {
-        columns: (f64, f64),
-        rows: core::ops::Range<usize>,
-        shift: f64,
-        lift: f64,
+    pub(crate) struct Thing {
+        pub(crate) columns: (f64, f64),
+        pub(crate) rows: core::ops::Range<usize>,
+        pub(crate) shift: f64,
+        pub(crate) lift: f64,
     }
+
+    pub(crate) fn no_rope() -> Mask {
+        Mask::new(CAMERA.width, CAMERA.height)
+    }
+
+    pub(crate) const HOME: Vec3 = Vec3::new(0.0, 0.0, 0.8);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fixture::*;
+    use super::*;
 
     fn background(images: &(Vec<u8>, Vec<u16>), rope: &Mask) -> BackgroundView {
         let frame =
             Frame::new(CAMERA.width, CAMERA.height, &images.0, &images.1, 0.001).expect("frame");
         BackgroundView::new(&frame, &CAMERA, rope, &[], (0.1, 3.0))
     }
-
-    fn no_rope() -> Mask {
-        Mask::new(CAMERA.width, CAMERA.height)
-    }
-
-    const HOME: Vec3 = Vec3::new(0.0, 0.0, 0.8);
 
     #[test]
     fn a_camera_that_moved_is_followed_to_a_fraction_of_its_move() {

@@ -5,13 +5,15 @@
 //! rope's axis), [`initialisation`] (the ordered centre line and `M`
 //! nodes when there is no state), and [`evidence`] (what the images say
 //! about a point: hidden by something, or in free space), and
-//! [`ego_motion`] (the camera's own motion, from the background), and
+//! [`ego_motion`] (the camera's own motion, from the background) with
+//! [`glance`] (whether it moved at all, cheaply), and
 //! [`sharing`] (with several ropes, which rope each pixel belongs to).
 
 pub mod camera;
 pub mod ego_motion;
 pub mod evidence;
 pub mod frame;
+pub mod glance;
 pub mod initialisation;
 pub mod point_cloud;
 pub mod segmentation;

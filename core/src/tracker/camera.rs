@@ -1,22 +1,28 @@
-//! What the tracker keeps to follow the camera's own motion: the last
-//! frame's background (`follow_camera`) and whether the caller told the
-//! motion for the next frame (`Tracker::move_camera`).
+//! What the tracker keeps to follow the camera's own motion: the
+//! background of the frame the state last agreed with (`follow_camera`)
+//! and whether the caller told the motion for the next frame
+//! (`Tracker::move_camera`).
 
 use crate::motion::RigidMotion;
 use crate::params::Params;
 use crate::perception::camera::CameraIntrinsics;
 use crate::perception::ego_motion::{camera_motion, BackgroundView, CameraMotion};
 use crate::perception::frame::Frame;
+use crate::perception::glance::BackgroundGlance;
 use crate::perception::segmentation::{Mask, Rect};
 
 /// The camera-following state of a tracker.
 #[derive(Debug, Clone, Default)]
 pub(super) struct CameraFollowing {
-    /// The last frame's background, for the camera's motion since.
+    /// The reference: the background of the last frame whose glance did
+    /// not show the camera still (or the first), for its motion since.
     background: Option<BackgroundView>,
     /// A view whose storage the next frame's is built in (a view is a few
     /// megabytes: allocated afresh every frame it costs page faults).
     spare: BackgroundView,
+    /// The reference frame's glance, and a spare.
+    glance: Option<BackgroundGlance>,
+    spare_glance: BackgroundGlance,
     /// The camera's motion was given for the next frame (`move_camera`).
     pub(super) given: bool,
     /// The camera's motion estimated on the last frame.
@@ -24,10 +30,14 @@ pub(super) struct CameraFollowing {
 }
 
 impl CameraFollowing {
-    /// With `params.follow_camera`: the camera's motion from the last
-    /// frame's background to `frame`'s (the `rope` mask and the declared
-    /// `occluders` left out; none when the caller gave it, or there is no
-    /// state to move), and `frame`'s background kept for the next.
+    /// With `params.follow_camera`: the camera's motion from the
+    /// reference's background to `frame`'s (the `rope` mask and the
+    /// declared `occluders` left out; none when the caller gave it, or
+    /// there is no state to move). A frame whose glance shows the camera
+    /// still since the reference's costs no estimate and keeps the
+    /// reference (a drift too slow to see from one frame to the next adds
+    /// up against it until the glance sees it); any other becomes the
+    /// reference.
     pub(super) fn follow(
         &mut self,
         frame: &Frame<'_>,
@@ -41,10 +51,22 @@ impl CameraFollowing {
             *self = Self::default();
             return None;
         }
-        let mut view = core::mem::take(&mut self.spare);
         let depth_range = (params.min_depth, params.max_depth);
+        let mut glance = core::mem::take(&mut self.spare_glance);
+        glance.rebuild(frame, rope, occluders, depth_range);
+        let estimate = !self.given && tracking && self.background.is_some();
+        if estimate
+            && self
+                .glance
+                .as_ref()
+                .is_some_and(|g| glance.still_since(g, camera))
+        {
+            self.spare_glance = glance;
+            return None;
+        }
+        let mut view = core::mem::take(&mut self.spare);
         view.rebuild(frame, camera, rope, occluders, depth_range);
-        if !self.given && tracking {
+        if estimate {
             if let Some(last) = &self.background {
                 self.estimated = camera_motion(last, &view);
             }
@@ -52,6 +74,9 @@ impl CameraFollowing {
         self.given = false;
         if let Some(last) = self.background.replace(view) {
             self.spare = last;
+        }
+        if let Some(last) = self.glance.replace(glance) {
+            self.spare_glance = last;
         }
         self.estimated.map(|m| m.motion)
     }
@@ -61,6 +86,9 @@ impl CameraFollowing {
     pub(super) fn forget(&mut self) {
         if let Some(last) = self.background.take() {
             self.spare = last;
+        }
+        if let Some(last) = self.glance.take() {
+            self.spare_glance = last;
         }
         self.given = false;
         self.estimated = None;
