@@ -26,7 +26,7 @@ use crate::perception::segmentation::{Mask, Rect};
 /// Background samples a glance reads at most (an even grid): a motion of
 /// a tenth of a pixel on a textured table explains several times the
 /// test's threshold with this many.
-pub const GLANCE_SAMPLES: usize = 4096;
+pub const GLANCE_SAMPLES: usize = 2048;
 /// The chi-square of three degrees of freedom at 0.999: the inverse
 /// depth's affine model is tested at the level [`SIGNIFICANCE`] sets for
 /// the six of a motion.
@@ -242,31 +242,59 @@ struct Fit<const P: usize> {
     at: Vec<usize>,
 }
 
-/// The least-squares solution of the `kept` samples (with the ridge), the
-/// variance it explains and the squares it leaves, or `None` when no
-/// regressor varies.
-fn solve<const P: usize>(
-    samples: &[([f64; P], f64)],
-    kept: &[bool],
-) -> Option<(SVector<f64, P>, f64, f64)> {
-    let (mut normal, mut moment) = (SMatrix::<f64, P, P>::zeros(), SVector::<f64, P>::zeros());
-    let mut squares = 0.0;
+/// A least-squares fit: its coefficients, the squares it explains and
+/// those it leaves.
+struct Solution<const P: usize> {
+    beta: [f64; P],
+    explained: f64,
+    left: f64,
+}
+
+impl<const P: usize> Solution<P> {
+    /// The fit's F statistic times `P` on `count` samples (a chi-square of
+    /// `P` degrees of freedom under no change, for many samples).
+    fn statistic(&self, count: usize) -> f64 {
+        if self.explained == 0.0 {
+            return 0.0;
+        }
+        let residual = self.left / count.saturating_sub(P).max(1) as f64;
+        if residual > 0.0 {
+            self.explained / residual
+        } else {
+            f64::INFINITY
+        }
+    }
+}
+
+/// The least-squares fit of the `kept` samples (with the ridge), or
+/// `None` when no regressor varies. Plain arrays: the normal equations of
+/// a few thousand samples are the glance's largest cost.
+fn solve<const P: usize>(samples: &[([f64; P], f64)], kept: &[bool]) -> Option<Solution<P>> {
+    let mut normal = [[0.0f64; P]; P];
+    let (mut moment, mut squares) = ([0.0f64; P], 0.0);
     for ((x, change), _) in samples.iter().zip(kept).filter(|(_, &k)| k) {
-        let x = SVector::<f64, P>::from_column_slice(x);
-        // The lower triangle only: the matrix is symmetric.
-        normal.syger(1.0, &x, &x, 1.0);
-        moment += x * *change;
+        for i in 0..P {
+            for j in 0..=i {
+                normal[i][j] += x[i] * x[j];
+            }
+            moment[i] += x[i] * change;
+        }
         squares += change * change;
     }
-    normal.fill_upper_triangle_with_lower_triangle();
-    let scale = normal.trace() / P as f64;
+    let mut matrix = SMatrix::<f64, P, P>::from_fn(|i, j| normal[i.max(j)][i.min(j)]);
+    let scale = matrix.trace() / P as f64;
     if !(scale > 0.0) {
         return None;
     }
-    normal += SMatrix::<f64, P, P>::identity() * (RIDGE * scale);
-    let beta = normal.cholesky()?.solve(&moment);
+    matrix += SMatrix::<f64, P, P>::identity() * (RIDGE * scale);
+    let moment = SVector::<f64, P>::from(moment);
+    let beta = matrix.cholesky()?.solve(&moment);
     let explained = beta.dot(&moment).clamp(0.0, squares);
-    Some((beta, explained, squares - explained))
+    Some(Solution {
+        beta: beta.into(),
+        explained,
+        left: squares - explained,
+    })
 }
 
 impl<const P: usize> Fit<P> {
@@ -279,7 +307,7 @@ impl<const P: usize> Fit<P> {
     /// (times `P`) above `chi_square` (the chi-square of `P` degrees of
     /// freedom at the level; the F distribution's limit for many samples),
     /// on the samples the fit leaves within [`OUTLIER_DEVIATIONS`] of it
-    /// (twice), and not next to one it leaves out on the `columns` wide
+    /// and not next to one it leaves out on the `columns` wide
     /// grid: something moving on its own in a still scene (a hand, a
     /// gripper) is a region of the image, not a motion of the whole of it,
     /// and the samples of that region whose change happens to be small
@@ -292,22 +320,21 @@ impl<const P: usize> Fit<P> {
             return None;
         }
         let mut kept = vec![true; count];
-        let mut residuals = Vec::with_capacity(count);
-        for _ in 0..2 {
-            let (beta, _, _) = solve(&self.samples, &kept)?;
-            residuals.clear();
-            residuals.extend(
-                self.samples
-                    .iter()
-                    .map(|(x, change)| change - SVector::<f64, P>::from_column_slice(x).dot(&beta)),
-            );
-            let mut sizes: Vec<f64> = residuals.iter().map(|r| r.abs()).collect();
-            let mid = sizes.len() / 2;
-            sizes.select_nth_unstable_by(mid, f64::total_cmp);
-            let limit = OUTLIER_DEVIATIONS * MAD_TO_SIGMA * sizes[mid];
-            for (k, r) in kept.iter_mut().zip(&residuals) {
-                *k = r.abs() <= limit;
-            }
+        let whole = solve(&self.samples, &kept)?;
+        let residual = |(x, change): &([f64; P], f64)| {
+            change - x.iter().zip(&whole.beta).map(|(x, b)| x * b).sum::<f64>()
+        };
+        let mut sizes: Vec<f64> = self.samples.iter().map(|s| residual(s).abs()).collect();
+        let mid = sizes.len() / 2;
+        let limit = OUTLIER_DEVIATIONS
+            * MAD_TO_SIGMA
+            * *sizes.select_nth_unstable_by(mid, f64::total_cmp).1;
+        for (k, s) in kept.iter_mut().zip(&self.samples) {
+            *k = residual(s).abs() <= limit;
+        }
+        if kept.iter().all(|&k| k) {
+            // Nothing moves on its own.
+            return Some(whole.statistic(count) > chi_square);
         }
         // The region round each sample left out.
         let rows = self.at.iter().max().map_or(0, |&i| i / columns.max(1) + 1);
@@ -330,16 +357,8 @@ impl<const P: usize> Fit<P> {
         if left < MIN_POINTS.max(P + 1) {
             return None;
         }
-        let (_, explained, residual) = solve(&self.samples, &kept)?;
-        if explained == 0.0 {
-            return Some(false);
-        }
-        let residual = residual / (left - P) as f64;
-        if !(residual > 0.0) {
-            return Some(true);
-        }
-        let f = explained / P as f64 / residual;
-        f.is_finite().then_some(f * P as f64 > chi_square)
+        let rest = solve(&self.samples, &kept)?;
+        Some(rest.statistic(left) > chi_square)
     }
 }
 
