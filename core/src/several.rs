@@ -10,7 +10,9 @@ use crate::perception::initialisation::TakenRope;
 use crate::perception::segmentation::{Mask, Rect};
 use crate::perception::sharing::OtherRopes;
 use crate::perception::sharing::{share_pixels, PixelShare, RopeLine, MAX_SHARED};
-use crate::tracker::{FrameOutput, Observation, Tracker, TrackerError, UNEXPLAINED_REACH};
+use crate::tracker::{
+    CameraFollowing, FrameOutput, Observation, Tracker, TrackerError, UNEXPLAINED_REACH,
+};
 
 /// Most ropes one [`MultiTracker`] follows: as many as pixels are shared
 /// between ([`MAX_SHARED`]).
@@ -26,10 +28,15 @@ pub const MAX_ROPES: usize = MAX_SHARED;
 /// start of the frame step first, on the shares of the last states; then
 /// each rope not tracked (not yet found, or lost) is initialised in turn
 /// from what the tracked ropes leave, so two ropes of one colour never
-/// take the same shape. With one rope it is exactly [`Tracker::process`].
+/// take the same shape. The camera's motion (`follow_camera`, the first
+/// rope's parameters deciding) is followed once for all ropes, every
+/// rope's mask left out of the background. With one rope it is exactly
+/// [`Tracker::process`].
 #[derive(Debug, Clone)]
 pub struct MultiTracker {
     ropes: Vec<Tracker>,
+    /// The camera's motion, followed for all ropes (with several).
+    following: CameraFollowing,
 }
 
 impl MultiTracker {
@@ -43,7 +50,10 @@ impl MultiTracker {
         if let Some(rope) = ropes.iter().position(|t| *t.camera() != camera) {
             return Err(TrackerError::CameraMismatch { rope });
         }
-        Ok(Self { ropes })
+        Ok(Self {
+            ropes,
+            following: CameraFollowing::default(),
+        })
     }
 
     /// The ropes' trackers, in the order given.
@@ -95,6 +105,7 @@ impl MultiTracker {
     /// Forgets every rope's state.
     pub fn reset(&mut self) {
         self.ropes.iter_mut().for_each(Tracker::reset);
+        self.following.forget();
     }
 
     /// Tracks every rope on `frame` (with `occlusions` blacked out): one
@@ -154,6 +165,7 @@ impl MultiTracker {
     ) -> Vec<FrameOutput> {
         let empty = Mask::new(frame.width, frame.height);
         let masks = padded(masks, self.ropes.len(), &empty);
+        self.follow_camera(frame, &masks, occlusions);
         let mut observations = observations.into_iter();
         let mut outputs: Vec<Option<FrameOutput>> = self
             .ropes
@@ -177,6 +189,36 @@ impl MultiTracker {
             outputs[k] = Some(self.ropes[k].update(frame, &obs));
         }
         outputs.into_iter().flatten().collect()
+    }
+
+    /// With several ropes and `follow_camera`: the camera's motion from the
+    /// background with every rope's mask left out, estimated once and
+    /// carried to each rope that follows the camera (a motion a caller
+    /// gave any rope skips the estimate, as for one rope).
+    fn follow_camera(&mut self, frame: &Frame<'_>, masks: &[&Mask], occlusions: &[Rect]) {
+        let params = *self.ropes[0].params();
+        if self.ropes.len() == 1 || !params.follow_camera {
+            self.following.forget();
+            return;
+        }
+        let mut every = Mask::new(frame.width, frame.height);
+        let pixels = every.data.len();
+        for mask in masks.iter().filter(|m| m.data.len() == pixels) {
+            every
+                .data
+                .iter_mut()
+                .zip(&mask.data)
+                .for_each(|(e, &m)| *e |= m);
+        }
+        self.following.given = self.ropes.iter().any(Tracker::camera_given);
+        let tracking = self.ropes.iter().any(Tracker::is_tracking);
+        let camera = *self.ropes[0].camera();
+        self.following
+            .follow(frame, (&every, occlusions), &camera, &params, tracking);
+        let estimate = self.following.estimated;
+        for rope in self.ropes.iter_mut().filter(|r| r.params().follow_camera) {
+            rope.camera_followed(estimate.as_ref());
+        }
     }
 
     /// Each rope's colour mask, with `occlusions` blacked out; ropes of one
@@ -315,5 +357,38 @@ mod tests {
         let masks = ropes.segment(&frame, &[]).expect("masks");
         let out = ropes.step(&frame, &masks[..1], Vec::new(), &[]);
         assert_eq!(out.len(), 2);
+    }
+
+    #[test]
+    fn the_ropes_carry_one_camera_motion_estimated_for_all() {
+        use crate::math::Vec3;
+        use crate::perception::ego_motion::fixture::{view, CAMERA, HOME};
+        let still = Params {
+            follow_camera: false,
+            ..Params::default()
+        };
+        let ropes = [Params::default(), Params::default(), still]
+            .into_iter()
+            .map(|p| Tracker::new(p, CAMERA, HsvRange::default()).expect("tracker"))
+            .collect();
+        let mut multi = MultiTracker::new(ropes).expect("three");
+        let px = HOME.z / CAMERA.fx;
+        let at = [HOME, HOME + Vec3::new(3.0 * px, 0.0, 0.0)];
+        for (k, centre) in at.into_iter().enumerate() {
+            let images = view(centre, Vec3::zeros(), true, 2.0, k as u64, None);
+            let frame = Frame::new(CAMERA.width, CAMERA.height, &images.0, &images.1, 0.001)
+                .expect("frame");
+            for rope in multi.ropes_mut() {
+                rope.track_for_test(alloc::vec![Vec3::new(0.0, 0.0, 0.8); 24]);
+            }
+            multi.process(&frame, &[]).expect("frame fits");
+        }
+        let motions: Vec<_> = multi.ropes().iter().map(Tracker::camera_motion).collect();
+        assert!(motions[0].is_some(), "no motion estimated");
+        assert_eq!(motions[0], motions[1]);
+        assert_eq!(
+            motions[2], None,
+            "a rope that does not follow the camera was moved"
+        );
     }
 }

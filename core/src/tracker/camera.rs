@@ -11,9 +11,10 @@ use crate::perception::frame::Frame;
 use crate::perception::glance::BackgroundGlance;
 use crate::perception::segmentation::{Mask, Rect};
 
-/// The camera-following state of a tracker.
+/// The camera-following state of a tracker (or of a
+/// [`crate::MultiTracker`]'s ropes together).
 #[derive(Debug, Clone, Default)]
-pub(super) struct CameraFollowing {
+pub(crate) struct CameraFollowing {
     /// The reference: the background of the last frame whose glance did
     /// not show the camera still (or the first), for its motion since.
     background: Option<BackgroundView>,
@@ -24,9 +25,12 @@ pub(super) struct CameraFollowing {
     glance: Option<BackgroundGlance>,
     spare_glance: BackgroundGlance,
     /// The camera's motion was given for the next frame (`move_camera`).
-    pub(super) given: bool,
+    pub(crate) given: bool,
+    /// The camera's motion for the next frame was followed outside (by a
+    /// `MultiTracker`, once for all its ropes).
+    pub(crate) outside: bool,
     /// The camera's motion estimated on the last frame.
-    pub(super) estimated: Option<CameraMotion>,
+    pub(crate) estimated: Option<CameraMotion>,
 }
 
 impl CameraFollowing {
@@ -38,7 +42,7 @@ impl CameraFollowing {
     /// reference (a drift too slow to see from one frame to the next adds
     /// up against it until the glance sees it); any other becomes the
     /// reference.
-    pub(super) fn follow(
+    pub(crate) fn follow(
         &mut self,
         frame: &Frame<'_>,
         (rope, occluders): (&Mask, &[Rect]),
@@ -46,6 +50,9 @@ impl CameraFollowing {
         params: &Params,
         tracking: bool,
     ) -> Option<RigidMotion> {
+        if core::mem::take(&mut self.outside) {
+            return None;
+        }
         self.estimated = None;
         if !params.follow_camera {
             *self = Self::default();
@@ -83,7 +90,7 @@ impl CameraFollowing {
 
     /// The next frame is not the last one's successor (a reset, a
     /// snapshot restored): no camera motion is estimated across them.
-    pub(super) fn forget(&mut self) {
+    pub(crate) fn forget(&mut self) {
         if let Some(last) = self.background.take() {
             self.spare = last;
         }
@@ -91,6 +98,7 @@ impl CameraFollowing {
             self.spare_glance = last;
         }
         self.given = false;
+        self.outside = false;
         self.estimated = None;
     }
 }

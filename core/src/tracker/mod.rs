@@ -33,7 +33,7 @@ use crate::visibility::{classify_nodes, visible_nodes_relative, NodeVisibility};
 mod camera;
 mod recovery;
 mod stepper;
-use camera::CameraFollowing;
+pub(crate) use camera::CameraFollowing;
 pub use recovery::{RecoveryBackoff, MAX_RECOVERY_WAIT};
 pub use stepper::{StepReports, Stepper};
 
@@ -323,6 +323,24 @@ impl Tracker {
         self.following.given = true;
         self.carry_state(motion);
         Ok(())
+    }
+
+    /// The camera's motion for the next frame as followed outside this
+    /// tracker (a `MultiTracker` follows it once for all its ropes): the
+    /// state is carried by `estimate`'s motion, if any, and the next
+    /// update follows nothing itself.
+    pub(crate) fn camera_followed(&mut self, estimate: Option<&CameraMotion>) {
+        self.following.given = false;
+        self.following.outside = true;
+        self.following.estimated = estimate.copied();
+        if let Some(m) = estimate {
+            self.carry_state(&m.motion);
+        }
+    }
+
+    /// Whether the caller gave the camera's motion for the next frame.
+    pub(crate) fn camera_given(&self) -> bool {
+        self.following.given
     }
 
     /// The tracked nodes moved as points at rest move under `motion`.
@@ -914,6 +932,14 @@ impl Tracker {
             visible: classes.visible,
             step,
         }
+    }
+}
+
+#[cfg(test)]
+impl Tracker {
+    /// Makes the tracker track `nodes` (tests of what carries a state).
+    pub(crate) fn track_for_test(&mut self, nodes: Vec<Vec3>) {
+        self.state = Some(TrackState { nodes, lost: false });
     }
 }
 
