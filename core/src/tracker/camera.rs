@@ -88,6 +88,15 @@ impl CameraFollowing {
         self.estimated.map(|m| m.motion)
     }
 
+    /// The camera's motion for the next frame was followed outside (by a
+    /// `MultiTracker`, once for all its ropes; `estimate` its estimate):
+    /// the next [`CameraFollowing::follow`] does nothing.
+    pub(crate) fn followed_outside(&mut self, estimate: Option<&CameraMotion>) {
+        self.given = false;
+        self.outside = true;
+        self.estimated = estimate.copied();
+    }
+
     /// The next frame is not the last one's successor (a reset, a
     /// snapshot restored): no camera motion is estimated across them.
     pub(crate) fn forget(&mut self) {

@@ -326,13 +326,10 @@ impl Tracker {
     }
 
     /// The camera's motion for the next frame as followed outside this
-    /// tracker (a `MultiTracker` follows it once for all its ropes): the
-    /// state is carried by `estimate`'s motion, if any, and the next
-    /// update follows nothing itself.
+    /// tracker (by a `MultiTracker`, once for all its ropes): the state is
+    /// carried by `estimate`'s motion, if any.
     pub(crate) fn camera_followed(&mut self, estimate: Option<&CameraMotion>) {
-        self.following.given = false;
-        self.following.outside = true;
-        self.following.estimated = estimate.copied();
+        self.following.followed_outside(estimate);
         if let Some(m) = estimate {
             self.carry_state(&m.motion);
         }
