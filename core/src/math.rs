@@ -111,6 +111,24 @@ const EXP2_NEG_SIXTYFOURTHS: [f64; 64] = [
     0.5054446430258502,
 ];
 
+/// The median absolute deviation of Gaussian values times this is their
+/// standard deviation.
+pub const MAD_TO_SIGMA: f64 = 1.4826;
+
+/// The median of `|v|` (0 for none; the upper middle of an even count);
+/// reorders `v`.
+pub fn median_abs(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    for x in v.iter_mut() {
+        *x = x.abs();
+    }
+    let mid = v.len() / 2;
+    v.select_nth_unstable_by(mid, |a, b| a.total_cmp(b));
+    v[mid]
+}
+
 /// Square root, the same on every target.
 #[inline]
 pub fn sqrt(x: f64) -> f64 {

@@ -15,7 +15,7 @@ use alloc::vec::Vec;
 
 use nalgebra::{Matrix3, SMatrix, SVector};
 
-use crate::math::Vec3;
+use crate::math::{median_abs, Vec3, MAD_TO_SIGMA};
 use crate::motion::{rotation_of, RigidMotion};
 use crate::perception::camera::CameraIntrinsics;
 use crate::perception::frame::Frame;
@@ -95,9 +95,6 @@ const MIN_DECISIVE: usize = 10;
 /// chi-square of one degree of freedom at 0.95 (in units of the
 /// residuals' variance, twice the loss).
 const DECISIVE: f64 = 3.84;
-/// The median absolute residual times this is the standard deviation of
-/// Gaussian residuals.
-const MAD_TO_SIGMA: f64 = 1.4826;
 /// Smallest brightness noise assumed, grey levels (8-bit images quantise).
 const MIN_BRIGHTNESS_SIGMA: f64 = 0.5;
 /// Smallest depth noise assumed, metres (millimetre depth units).
@@ -696,19 +693,6 @@ fn cauchy_weight(r: f64) -> f64 {
 fn cauchy_loss(r: f64) -> f64 {
     let x = r / CAUCHY;
     0.5 * CAUCHY * CAUCHY * libm::log1p(x * x)
-}
-
-/// The median of `|v|` (0 for none); reorders `v`.
-fn median_abs(v: &mut [f64]) -> f64 {
-    if v.is_empty() {
-        return 0.0;
-    }
-    for x in v.iter_mut() {
-        *x = x.abs();
-    }
-    let mid = v.len() / 2;
-    v.select_nth_unstable_by(mid, |a, b| a.total_cmp(b));
-    v[mid]
 }
 
 /// The residuals of the templates under `motion` on a later level: the

@@ -18,6 +18,7 @@ use alloc::vec::Vec;
 
 use nalgebra::{SMatrix, SVector};
 
+use crate::math::{median_abs, MAD_TO_SIGMA};
 use crate::perception::camera::CameraIntrinsics;
 use crate::perception::ego_motion::{DEPTH_AGREEMENT, FINEST_WIDTH, MIN_POINTS, SIGNIFICANCE};
 use crate::perception::frame::Frame;
@@ -35,9 +36,6 @@ const SIGNIFICANCE_3: f64 = 16.27;
 /// it is something moving on its own (a hand, a gripper) and is left out:
 /// a Gaussian residual goes so far about once in 16,000 samples.
 const OUTLIER_DEVIATIONS: f64 = 4.0;
-/// The median absolute residual times this is the standard deviation of
-/// Gaussian residuals.
-const MAD_TO_SIGMA: f64 = 1.4826;
 /// Ridge on the normal equations, relative to their mean curvature (as the
 /// motion estimate's): what the samples leave undetermined explains
 /// nothing.
@@ -324,11 +322,8 @@ impl<const P: usize> Fit<P> {
         let residual = |(x, change): &([f64; P], f64)| {
             change - x.iter().zip(&whole.beta).map(|(x, b)| x * b).sum::<f64>()
         };
-        let mut sizes: Vec<f64> = self.samples.iter().map(|s| residual(s).abs()).collect();
-        let mid = sizes.len() / 2;
-        let limit = OUTLIER_DEVIATIONS
-            * MAD_TO_SIGMA
-            * *sizes.select_nth_unstable_by(mid, f64::total_cmp).1;
+        let mut residuals: Vec<f64> = self.samples.iter().map(residual).collect();
+        let limit = OUTLIER_DEVIATIONS * MAD_TO_SIGMA * median_abs(&mut residuals);
         for (k, s) in kept.iter_mut().zip(&self.samples) {
             *k = residual(s).abs() <= limit;
         }

@@ -9,7 +9,7 @@ use alloc::vec::Vec;
 
 use nalgebra::{Matrix3, SMatrix, SVector};
 
-use crate::math::Vec3;
+use crate::math::{Vec3, MAD_TO_SIGMA};
 use crate::motion::rotation_of;
 pub use crate::motion::RigidMotion;
 
@@ -31,9 +31,6 @@ const ROUNDS: usize = 8;
 /// The Cauchy weight's scale, times the residuals' robust spread: 95 %
 /// efficiency on Gaussian residuals.
 const CAUCHY_SCALE: f64 = 2.385;
-/// The median absolute residual times this is the standard deviation of
-/// Gaussian residuals.
-const MAD_TO_SIGMA: f64 = 1.4826;
 
 /// The rope's unit tangent at node `k` of `chain` (the central difference
 /// of its neighbours), or `None` where the chain gives no direction.
