@@ -998,6 +998,17 @@ pub(crate) mod fixture {
         pub(crate) lift: f64,
     }
 
+    /// A textured box 6 cm above the table over pixel columns 60-160 and
+    /// `rows`, slid `shift` pixels along the rows.
+    pub(crate) fn sliding_box(rows: core::ops::Range<usize>, shift: f64) -> Option<Thing> {
+        Some(Thing {
+            columns: (60.0, 160.0),
+            rows,
+            shift,
+            lift: 0.06,
+        })
+    }
+
     pub(crate) fn no_rope() -> Mask {
         Mask::new(CAMERA.width, CAMERA.height)
     }
@@ -1081,14 +1092,7 @@ mod tests {
     #[test]
     fn a_box_sliding_over_a_plain_table_is_not_the_camera() {
         // Nothing masks it: it is not the rope and no rectangle was declared.
-        let slid = |shift| {
-            Some(Thing {
-                columns: (60.0, 160.0),
-                rows: 60..180,
-                shift,
-                lift: 0.06,
-            })
-        };
+        let slid = |shift| sliding_box(60..180, shift);
         let a = background(
             &view(HOME, Vec3::zeros(), false, 1.0, 1, slid(0.0)),
             &no_rope(),

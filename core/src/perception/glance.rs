@@ -466,14 +466,7 @@ mod tests {
     fn a_box_moving_over_the_table_is_not_the_camera_moving() {
         // A textured box lifted off the table slides 3 px across a fifth of
         // the image; nothing masks it.
-        let slid = |shift| {
-            Some(Thing {
-                columns: (60.0, 160.0),
-                rows: 60..160,
-                shift,
-                lift: 0.06,
-            })
-        };
+        let slid = |shift| sliding_box(60..160, shift);
         let a = glance(
             &view(HOME, Vec3::zeros(), true, 2.0, 1, slid(0.0)),
             &no_rope(),
