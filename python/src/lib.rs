@@ -14,8 +14,8 @@ use pyo3::create_exception;
 use pyo3::exceptions::{PyIndexError, PyValueError};
 use pyo3::prelude::*;
 use upetrack::motion::RigidMotion;
-use upetrack::{Algorithm, CameraIntrinsics, Frame, HsvRange, Params, Rect};
-use upetrack_io::run::{frame_record, run_frame};
+use upetrack::{Algorithm, CameraIntrinsics, Frame, FrameOutput, HsvRange, Params, Rect};
+use upetrack_io::run::{output_record, run_frame, run_frame_several};
 use upetrack_io::{Sequence as IoSequence, SequenceError as IoSequenceError, Source};
 
 create_exception!(
@@ -277,47 +277,19 @@ impl Tracker {
         depth: PyReadonlyArray2<'_, u16>,
         occlusions: Option<Vec<(i64, i64, i64, i64)>>,
     ) -> PyResult<StepResult> {
-        let camera = *self.inner.camera();
-        let (w, h) = (camera.width as usize, camera.height as usize);
-        if color.shape() != [h, w, 3] {
-            return Err(PyValueError::new_err(format!(
-                "color: shape {:?}, expected ({h}, {w}, 3) uint8 RGB",
-                color.shape()
-            )));
-        }
-        if depth.shape() != [h, w] {
-            return Err(PyValueError::new_err(format!(
-                "depth: shape {:?}, expected ({h}, {w}) uint16",
-                depth.shape()
-            )));
-        }
-        // `as_slice` takes Fortran order too, which would be read transposed.
-        let c_order = color.is_c_contiguous() && depth.is_c_contiguous();
-        let (true, Ok(rgb), Ok(z)) = (c_order, color.as_slice(), depth.as_slice()) else {
-            return Err(PyValueError::new_err(
-                "color and depth must be C-contiguous (numpy.ascontiguousarray)",
-            ));
-        };
-        let frame = Frame::new(camera.width, camera.height, rgb, z, self.depth_scale)
-            .map_err(tracker_error)?;
+        let frame = frame_of(self.inner.camera(), &color, &depth, self.depth_scale)?;
         let these: Option<Vec<Rect>> = occlusions.map(rects);
         let (inner, occlusions) = (&mut self.inner, these.as_ref().unwrap_or(&self.occlusions));
         let timed = py
             .detach(|| run_frame(inner, &frame, occlusions, &mut clock_ms()))
             .map_err(tracker_error)?;
-        let record = frame_record(0, &timed);
-        let nodes: Vec<Vec<f64>> = record.nodes.iter().map(|p| p.to_vec()).collect();
-        Ok(StepResult {
-            nodes: PyArray2::from_vec2(py, &nodes)?.unbind(),
-            visible: PyArray1::from_slice(py, &record.visible).unbind(),
-            lost: record.lost,
-            reason: record.reason,
-            recovered: record.recovered,
-            segment_ms: timed.segment_ms,
-            cloud_ms: timed.cloud_ms,
-            track_ms: timed.track_ms,
-            total_ms: timed.total_ms,
-        })
+        let times = [
+            timed.segment_ms,
+            timed.cloud_ms,
+            timed.track_ms,
+            timed.total_ms,
+        ];
+        step_result(py, &timed.output, times)
     }
 
     /// The camera moved since the last frame (an arm's kinematics, an
@@ -325,26 +297,150 @@ impl Tracker {
     /// point's coordinates in the last frame's camera to this frame's
     /// (metres). The tracked rope is moved with it before the next step.
     fn move_camera(&mut self, motion: PyReadonlyArray2<'_, f64>) -> PyResult<()> {
-        let shape = motion.shape();
-        if !(shape == [4, 4] || shape == [3, 4]) {
-            return Err(PyValueError::new_err(format!(
-                "motion: shape {shape:?}, expected (4, 4) or (3, 4) float64"
-            )));
-        }
-        let m = motion.as_array();
-        if shape[0] == 4 && [m[[3, 0]], m[[3, 1]], m[[3, 2]], m[[3, 3]]] != [0.0, 0.0, 0.0, 1.0] {
-            return Err(PyValueError::new_err(
-                "motion: a rigid transform's last row is (0, 0, 0, 1)",
-            ));
-        }
-        let rows: [f64; 12] = core::array::from_fn(|k| m[[k / 4, k % 4]]);
-        let rigid = RigidMotion::from_rows(&rows);
-        self.inner.move_camera(&rigid).map_err(tracker_error)
+        self.inner
+            .move_camera(&rigid_of(&motion)?)
+            .map_err(tracker_error)
     }
 
     /// Forgets the rope: the next frame finds it again.
     fn reset(&mut self) {
         self.inner.reset();
+    }
+}
+
+/// The core's view of `color` (uint8 H x W x 3 RGB) and `depth` (uint16
+/// H x W) for `camera`, refused with the reason when they do not fit it.
+fn frame_of<'a>(
+    camera: &CameraIntrinsics,
+    color: &'a PyReadonlyArray3<'_, u8>,
+    depth: &'a PyReadonlyArray2<'_, u16>,
+    depth_scale: f64,
+) -> PyResult<Frame<'a>> {
+    let (w, h) = (camera.width as usize, camera.height as usize);
+    if color.shape() != [h, w, 3] {
+        return Err(PyValueError::new_err(format!(
+            "color: shape {:?}, expected ({h}, {w}, 3) uint8 RGB",
+            color.shape()
+        )));
+    }
+    if depth.shape() != [h, w] {
+        return Err(PyValueError::new_err(format!(
+            "depth: shape {:?}, expected ({h}, {w}) uint16",
+            depth.shape()
+        )));
+    }
+    // `as_slice` takes Fortran order too, which would be read transposed.
+    let c_order = color.is_c_contiguous() && depth.is_c_contiguous();
+    let (true, Ok(rgb), Ok(z)) = (c_order, color.as_slice(), depth.as_slice()) else {
+        return Err(PyValueError::new_err(
+            "color and depth must be C-contiguous (numpy.ascontiguousarray)",
+        ));
+    };
+    Frame::new(camera.width, camera.height, rgb, z, depth_scale).map_err(tracker_error)
+}
+
+/// A rope's [`StepResult`] from its `output` and the frame's `times`
+/// (segmentation, cloud, step, total, ms).
+fn step_result(py: Python<'_>, output: &FrameOutput, times: [f64; 4]) -> PyResult<StepResult> {
+    let record = output_record(0, output, times[2], times[3]);
+    let nodes: Vec<Vec<f64>> = record.nodes.iter().map(|p| p.to_vec()).collect();
+    Ok(StepResult {
+        nodes: PyArray2::from_vec2(py, &nodes)?.unbind(),
+        visible: PyArray1::from_slice(py, &record.visible).unbind(),
+        lost: record.lost,
+        reason: record.reason,
+        recovered: record.recovered,
+        segment_ms: times[0],
+        cloud_ms: times[1],
+        track_ms: times[2],
+        total_ms: times[3],
+    })
+}
+
+/// A 4 x 4 or 3 x 4 float64 rigid transform as the core's motion.
+fn rigid_of(motion: &PyReadonlyArray2<'_, f64>) -> PyResult<RigidMotion> {
+    let shape = motion.shape();
+    if !(shape == [4, 4] || shape == [3, 4]) {
+        return Err(PyValueError::new_err(format!(
+            "motion: shape {shape:?}, expected (4, 4) or (3, 4) float64"
+        )));
+    }
+    let m = motion.as_array();
+    if shape[0] == 4 && [m[[3, 0]], m[[3, 1]], m[[3, 2]], m[[3, 3]]] != [0.0, 0.0, 0.0, 1.0] {
+        return Err(PyValueError::new_err(
+            "motion: a rigid transform's last row is (0, 0, 0, 1)",
+        ));
+    }
+    let rows: [f64; 12] = core::array::from_fn(|k| m[[k / 4, k % 4]]);
+    Ok(RigidMotion::from_rows(&rows))
+}
+
+/// Tracks every rope of a sequence of several together, as `upetrack
+/// track` does (`seq.multi_tracker()`): each frame is segmented once per
+/// colour, the pixels several ropes' colours accept are shared out to the
+/// nearest tracked rope, and the camera's motion is followed once.
+#[pyclass(module = "upetrack")]
+struct MultiTracker {
+    inner: upetrack::MultiTracker,
+    names: Vec<String>,
+    depth_scale: f64,
+}
+
+#[pymethods]
+impl MultiTracker {
+    /// The ropes' names, in the order of `step`'s results.
+    #[getter]
+    fn ropes(&self) -> Vec<String> {
+        self.names.clone()
+    }
+
+    /// Tracks one frame (as `Tracker.step`): one `StepResult` per rope, in
+    /// order; the times in each are the whole frame's (every rope's).
+    #[pyo3(signature = (color, depth, occlusions=Vec::new()))]
+    fn step(
+        &mut self,
+        py: Python<'_>,
+        color: PyReadonlyArray3<'_, u8>,
+        depth: PyReadonlyArray2<'_, u16>,
+        occlusions: Vec<(i64, i64, i64, i64)>,
+    ) -> PyResult<Vec<StepResult>> {
+        let camera = *self.inner.first().camera();
+        let frame = frame_of(&camera, &color, &depth, self.depth_scale)?;
+        let (inner, occlusions) = (&mut self.inner, rects(occlusions));
+        let timed = py
+            .detach(|| run_frame_several(inner, &frame, &occlusions, &mut clock_ms()))
+            .map_err(tracker_error)?;
+        let times = [
+            timed.segment_ms,
+            timed.cloud_ms,
+            timed.track_ms,
+            timed.total_ms,
+        ];
+        timed
+            .outputs
+            .iter()
+            .map(|output| step_result(py, output, times))
+            .collect()
+    }
+
+    /// The camera moved since the last frame (as `Tracker.move_camera`):
+    /// every rope is moved with it.
+    fn move_camera(&mut self, motion: PyReadonlyArray2<'_, f64>) -> PyResult<()> {
+        let rigid = rigid_of(&motion)?;
+        self.inner
+            .ropes_mut()
+            .iter_mut()
+            .try_for_each(|rope| rope.move_camera(&rigid))
+            .map_err(tracker_error)
+    }
+
+    /// Forgets every rope: the next frame finds them again.
+    fn reset(&mut self) {
+        self.inner.reset();
+    }
+
+    fn __repr__(&self) -> String {
+        format!("MultiTracker(ropes={:?})", self.names)
     }
 }
 
@@ -480,6 +576,24 @@ impl Sequence {
         })
     }
 
+    /// A tracker of every rope `dlo.json` lists, together (their colours,
+    /// priors and hints), as `upetrack track` tracks them; one rope's is
+    /// that rope's `tracker()` in a list of one.
+    #[pyo3(signature = (params=None, algorithm=None))]
+    fn multi_tracker(
+        &self,
+        params: Option<&Bound<'_, PyAny>>,
+        algorithm: Option<&str>,
+    ) -> PyResult<MultiTracker> {
+        let params = algorithm_of(algorithm, params_of(params)?)?;
+        let inner = self.inner.multi_tracker(params).map_err(tracker_error)?;
+        Ok(MultiTracker {
+            inner,
+            names: self.ropes(),
+            depth_scale: self.inner.depth_scale,
+        })
+    }
+
     fn __repr__(&self) -> String {
         format!("Sequence({:?}, {} frames)", self.path, self.inner.len())
     }
@@ -559,6 +673,7 @@ fn upetrack_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_class::<Intrinsics>()?;
     m.add_class::<Tracker>()?;
+    m.add_class::<MultiTracker>()?;
     m.add_class::<StepResult>()?;
     m.add_class::<Sequence>()?;
     m.add_class::<Frames>()?;

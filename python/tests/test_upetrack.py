@@ -79,6 +79,26 @@ def test_a_sequence_of_several_ropes_names_them_tracks_each_and_track_writes_eve
     assert untimed(json.loads(ours.read_text())) == untimed(json.loads(theirs.read_text()))
 
 
+def test_several_ropes_stepped_together_give_the_commands_nodes_to_the_last_bit():
+    two = ROOT / "samples" / "two-ropes-crossing"
+    result = json.loads(upetrack.track(two))
+    seq = upetrack.open(two)
+    ropes = seq.multi_tracker()
+    assert ropes.ropes == ["blue-a", "blue-b"]
+    for i in range(len(seq)):
+        color, depth = seq[i]
+        steps = ropes.step(color, depth, occlusions=seq.occlusions_at(i))
+        assert len(steps) == 2
+        for k, r in enumerate(steps):
+            theirs = result["ropes"][k]["frames"][i]
+            assert r.nodes.tolist() == theirs["nodes"], f"rope {k}, frame {i}"
+            assert r.visible.tolist() == theirs["visible"], f"rope {k}, frame {i}"
+    with pytest.raises(ValueError, match="shape"):
+        ropes.step(color[:10], depth)
+    ropes.reset()
+    assert all(not r.lost for r in ropes.step(*seq[0]))
+
+
 def test_arrays_as_pyrealsense2_gives_them():
     seq = upetrack.open(SAMPLE)
     color, depth = seq[0]

@@ -10,6 +10,7 @@ __version__: str
 __all__ = [
     "Frames",
     "Intrinsics",
+    "MultiTracker",
     "Sequence",
     "SequenceError",
     "StepResult",
@@ -90,6 +91,25 @@ class Tracker:
         """Forget the rope: the next frame finds it again."""
 
 @final
+class MultiTracker:
+    """Tracks every rope of a sequence of several together, as `upetrack track` does."""
+
+    @property
+    def ropes(self) -> list[str]:
+        """The ropes' names, in the order of `step`'s results."""
+    def step(
+        self,
+        color: npt.NDArray[np.uint8],
+        depth: npt.NDArray[np.uint16],
+        occlusions: Seq[_Rect] = ...,
+    ) -> list[StepResult]:
+        """Track one frame: one result per rope, in order (the times are the whole frame's)."""
+    def move_camera(self, motion: npt.NDArray[np.float64]) -> None:
+        """The camera moved since the last frame (as `Tracker.move_camera`): every rope moves with it."""
+    def reset(self) -> None:
+        """Forget every rope: the next frame finds them again."""
+
+@final
 class Frames:
     """The frames of a sequence in order, as (time in seconds, (color, depth))."""
 
@@ -117,6 +137,8 @@ class Sequence:
         """The names of the ropes dlo.json lists (one name for one rope)."""
     def tracker(self, params: _Params = None, algorithm: Optional[str] = None, rope: int = 0) -> Tracker:
         """A tracker of this sequence's rope (with several ropes, rope `rope` alone; `track` tracks them together)."""
+    def multi_tracker(self, params: _Params = None, algorithm: Optional[str] = None) -> MultiTracker:
+        """A tracker of every rope dlo.json lists, together, as `upetrack track` tracks them."""
 
 def open(path: _Path, dlo: Optional[_Path] = None) -> Sequence:
     """Open a sequence folder, a .zip, or a recording (.bag, .db3, .mcap; dlo: its dlo.json)."""
