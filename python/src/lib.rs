@@ -31,6 +31,13 @@ create_exception!(
     "A sequence or recording that cannot be read (the reader's message, naming the file)."
 );
 
+/// A timed frame's stage times: segmentation, cloud, step, total (ms).
+macro_rules! times {
+    ($t:expr) => {
+        [$t.segment_ms, $t.cloud_ms, $t.track_ms, $t.total_ms]
+    };
+}
+
 fn tracker_error(e: impl std::fmt::Display) -> PyErr {
     TrackerError::new_err(e.to_string())
 }
@@ -283,13 +290,7 @@ impl Tracker {
         let timed = py
             .detach(|| run_frame(inner, &frame, occlusions, &mut clock_ms()))
             .map_err(tracker_error)?;
-        let times = [
-            timed.segment_ms,
-            timed.cloud_ms,
-            timed.track_ms,
-            timed.total_ms,
-        ];
-        step_result(py, &timed.output, times)
+        step_result(py, &timed.output, times!(timed))
     }
 
     /// The camera moved since the last frame (an arm's kinematics, an
@@ -410,16 +411,10 @@ impl MultiTracker {
         let timed = py
             .detach(|| run_frame_several(inner, &frame, &occlusions, &mut clock_ms()))
             .map_err(tracker_error)?;
-        let times = [
-            timed.segment_ms,
-            timed.cloud_ms,
-            timed.track_ms,
-            timed.total_ms,
-        ];
         timed
             .outputs
             .iter()
-            .map(|output| step_result(py, output, times))
+            .map(|output| step_result(py, output, times!(timed)))
             .collect()
     }
 
