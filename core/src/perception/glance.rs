@@ -511,6 +511,32 @@ mod tests {
     }
 
     #[test]
+    fn frames_of_any_size_give_a_glance_without_a_panic() {
+        for (w, h) in [(1, 1), (3, 2), (2, 3), (5, 5), (6, 7), (641, 17), (17, 641)] {
+            let (rgb, depth) = (vec![90u8; 3 * w * h], vec![800u16; w * h]);
+            let frame = Frame::new(w as u32, h as u32, &rgb, &depth, 0.001).expect("frame");
+            let mut rope = Mask::new(w as u32, h as u32);
+            rope.data[0] = true;
+            let box_over = [Rect {
+                x: -3,
+                y: -3,
+                w: 4,
+                h: 4,
+            }];
+            let a = BackgroundGlance::new(&frame, &rope, &box_over, (0.1, 3.0));
+            let b = BackgroundGlance::new(&frame, &Mask::new(1, 1), &[], (0.1, 3.0));
+            let camera = CameraIntrinsics {
+                width: w as u32,
+                height: h as u32,
+                ..CAMERA
+            };
+            // Identical plain frames: still where the glance can tell, never a panic.
+            let _ = a.still_since(&b, &camera);
+            assert!(!a.still_since(&BackgroundGlance::default(), &camera));
+        }
+    }
+
+    #[test]
     fn the_same_images_read_still() {
         let images = table_from(HOME, Vec3::zeros(), true, 2.0, 1);
         let a = glance(&images, &no_rope());
