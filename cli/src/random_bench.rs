@@ -16,7 +16,7 @@ use upetrack_synth::random::{
 use upetrack_synth::SIMULATOR_VERSION;
 
 use crate::bench_files::{ensure_written, publish};
-use crate::synth::{for_each_parallel, random_dir, write_random};
+use crate::synth::{for_each_parallel, gathered, random_dir, write_random};
 use indicatif::ProgressBar;
 
 use crate::args::CompareArgs;
@@ -300,12 +300,8 @@ pub fn run(
         Ok(())
     })?;
     bar.finish_and_clear();
-    let mut rows = rows
-        .into_inner()
-        .map_err(|_| CliError::internal("a worker thread panicked"))?;
-    let mut draws = draws
-        .into_inner()
-        .map_err(|_| CliError::internal("a worker thread panicked"))?;
+    let mut rows = gathered(rows)?;
+    let mut draws = gathered(draws)?;
     rows.sort_by_key(|r| r.seed);
     draws.sort_by_key(|d| d.seed);
     let text = tables(range, &rows, &draws, algorithms);

@@ -312,9 +312,7 @@ fn run_drawn(
         Ok(())
     })?;
     bar.finish_and_clear();
-    let mut rows = rows
-        .into_inner()
-        .map_err(|_| CliError::internal("a worker thread panicked"))?;
+    let mut rows = crate::synth::gathered(rows)?;
     rows.sort_by(|a, b| (a.seed, &a.algorithm).cmp(&(b.seed, &b.algorithm)));
     let text = drawn_markdown(&rows, range_name, &seeds, frames, algorithms);
     let markers = (DRAWN_BEGIN_MARKER, DRAWN_END_MARKER);

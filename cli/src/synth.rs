@@ -240,6 +240,14 @@ pub fn write_random(
 }
 
 /// Runs `work` on every item, one item per thread at a time on as many
+/// What worker threads collected under a mutex (an error when one of them
+/// panicked while holding it).
+pub fn gathered<T>(collected: std::sync::Mutex<Vec<T>>) -> Result<Vec<T>, CliError> {
+    collected
+        .into_inner()
+        .map_err(|_| CliError::internal("a worker thread panicked"))
+}
+
 /// threads as the machine has cores; stops at the first error and returns it.
 pub fn for_each_parallel<T: Sync>(
     items: &[T],

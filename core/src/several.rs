@@ -37,6 +37,9 @@ pub struct MultiTracker {
     ropes: Vec<Tracker>,
     /// The camera's motion, followed for all ropes (with several).
     following: CameraFollowing,
+    /// Every rope's mask, the background's hole (storage kept: a frame's
+    /// worth of pixels allocated afresh each frame costs page faults).
+    every: Mask,
 }
 
 impl MultiTracker {
@@ -53,6 +56,7 @@ impl MultiTracker {
         Ok(Self {
             ropes,
             following: CameraFollowing::default(),
+            every: Mask::new(0, 0),
         })
     }
 
@@ -201,20 +205,17 @@ impl MultiTracker {
             self.following.forget();
             return;
         }
-        let mut every = Mask::new(frame.width, frame.height);
-        let pixels = every.data.len();
-        for mask in masks.iter().filter(|m| m.data.len() == pixels) {
-            every
-                .data
-                .iter_mut()
-                .zip(&mask.data)
-                .for_each(|(e, &m)| *e |= m);
-        }
+        let every = &mut self.every;
+        (every.width, every.height) = (frame.width, frame.height);
+        every.data.clear();
+        every.data.resize(frame.pixel_count(), false);
+        masks.iter().for_each(|m| every.include(m));
         self.following.given = self.ropes.iter().any(Tracker::camera_given);
         let tracking = self.ropes.iter().any(Tracker::is_tracking);
         let camera = *self.ropes[0].camera();
+        let background = (&self.every, occlusions);
         self.following
-            .follow(frame, (&every, occlusions), &camera, &params, tracking);
+            .follow(frame, background, &camera, &params, tracking);
         let estimate = self.following.estimated;
         for rope in self.ropes.iter_mut().filter(|r| r.params().follow_camera) {
             rope.camera_followed(estimate.as_ref());

@@ -7,6 +7,7 @@ use ropes::{flat_truth, RopeFrame, RopeInfo, RopeOptions};
 use serde::{Deserialize, Serialize};
 use upetrack::metrics::{frame_error, frame_error_px};
 use upetrack::perception::initialisation::InitReport;
+use upetrack::perception::segmentation::Mask;
 use upetrack::tracker::{FrameOutput, FrameStatus, Observation};
 use upetrack::{CameraIntrinsics, Frame, HsvRange, MultiTracker, Params, Rect, Tracker, Vec3};
 use upetrack_io::decode::{decode_color, decode_depth};
@@ -149,7 +150,7 @@ pub struct WasmTracker {
     /// The first rope's last observation (one rope).
     last_obs: Option<Observation>,
     /// The ropes' colour masks of the last frame (several).
-    last_masks: Option<Vec<upetrack::perception::segmentation::Mask>>,
+    last_masks: Option<Vec<Mask>>,
     /// Every rope's last output.
     last: Vec<FrameOutput>,
 }
@@ -476,13 +477,9 @@ impl WasmTracker {
     pub fn last_mask(&self) -> Vec<u8> {
         if let Some(masks) = &self.last_masks {
             // Every rope's colour, made only when the page asks for it.
-            let mut union = vec![0u8; masks.first().map_or(0, |m| m.data.len())];
-            for m in masks {
-                for (u, &b) in union.iter_mut().zip(&m.data) {
-                    *u |= b as u8;
-                }
-            }
-            return union;
+            let mut union = masks.first().cloned().unwrap_or_else(|| Mask::new(0, 0));
+            masks.iter().skip(1).for_each(|m| union.include(m));
+            return union.data.iter().map(|&b| b as u8).collect();
         }
         self.last_obs
             .as_ref()

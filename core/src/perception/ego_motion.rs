@@ -101,7 +101,7 @@ const MIN_BRIGHTNESS_SIGMA: f64 = 0.5;
 const MIN_DEPTH_SIGMA: f64 = 0.0005;
 /// A block's depths agree (one surface) when their spread is within this
 /// share of their mean.
-pub(crate) const DEPTH_AGREEMENT: f32 = 0.02;
+const DEPTH_AGREEMENT: f32 = 0.02;
 /// The chi-square of six degrees of freedom at 0.999: how much better (in
 /// units of the residuals' variance) the motion must explain the images
 /// than no motion to be taken.
@@ -222,7 +222,7 @@ impl Level {
 
 /// The mean of four `depths` when all are known and agree (one surface),
 /// else 0.
-fn agreed_depth(depths: [f32; 4]) -> f32 {
+pub(crate) fn agreed_depth(depths: [f32; 4]) -> f32 {
     // Plain comparisons (no NaN can reach them): the library's min and max
     // handle NaN at a cost this loop over every block notices.
     let [a, b, c, d] = depths;

@@ -20,7 +20,7 @@ use nalgebra::{SMatrix, SVector};
 
 use crate::math::{median_abs, MAD_TO_SIGMA};
 use crate::perception::camera::CameraIntrinsics;
-use crate::perception::ego_motion::{DEPTH_AGREEMENT, FINEST_WIDTH, MIN_POINTS, SIGNIFICANCE};
+use crate::perception::ego_motion::{agreed_depth, FINEST_WIDTH, MIN_POINTS, SIGNIFICANCE};
 use crate::perception::frame::Frame;
 use crate::perception::segmentation::{Mask, Rect};
 
@@ -124,9 +124,14 @@ impl BackgroundGlance {
             Some(&[r, g, b]) => r as u32 + 2 * g as u32 + b as u32,
             _ => 0,
         };
+        // Metres, 0 (unknown) outside the range.
         let metres = |i: usize| {
             let z = frame.depth[i] as f64 * frame.depth_scale;
-            (z >= min_depth && z <= max_depth).then_some(z)
+            if z >= min_depth && z <= max_depth {
+                z as f32
+            } else {
+                0.0
+            }
         };
         for v in along(h, grid) {
             // The rope's rows round this grid row, or-ed into one.
@@ -164,19 +169,9 @@ impl BackgroundGlance {
                 let right = (luma(b + 1) + luma(d + 1)) as f32;
                 let left = (luma(a - 1) + luma(c - 1)) as f32;
                 let (top, bottom) = ((la + lb) as f32, (lc + ld) as f32);
-                let inverse_depth = match [a, b, c, d].map(metres) {
-                    [Some(a), Some(b), Some(c), Some(d)] => {
-                        let mean = 0.25 * (a + b + c + d);
-                        // One surface, as the motion estimate's blocks.
-                        let spread = a.max(b).max(c).max(d) - a.min(b).min(c).min(d);
-                        if spread <= DEPTH_AGREEMENT as f64 * mean {
-                            (1.0 / mean) as f32
-                        } else {
-                            f32::NAN
-                        }
-                    }
-                    _ => f32::NAN,
-                };
+                // One surface, as the motion estimate's blocks.
+                let depth = agreed_depth([a, b, c, d].map(metres));
+                let inverse_depth = if depth > 0.0 { 1.0 / depth } else { f32::NAN };
                 self.samples.push(Sample {
                     grey,
                     // Along x: the columns beside the block; along y its

@@ -281,6 +281,16 @@ impl Mask {
     pub fn count(&self) -> usize {
         self.data.iter().filter(|&&b| b).count()
     }
+
+    /// Sets every pixel `other` sets (a mask of another size adds nothing).
+    pub fn include(&mut self, other: &Mask) {
+        if (other.width, other.height) == (self.width, self.height) {
+            self.data
+                .iter_mut()
+                .zip(&other.data)
+                .for_each(|(p, &o)| *p |= o);
+        }
+    }
 }
 
 /// `round((255 << 12) / v)`, OpenCV's saturation divisor table.
@@ -670,6 +680,19 @@ pub fn without_wide_parts(mask: &Mask, max_width: f64) -> Option<(Mask, usize)> 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_mask_includes_another_of_its_size_only() {
+        let mut a = Mask::new(3, 2);
+        let mut b = Mask::new(3, 2);
+        (a.data[0], b.data[4]) = (true, true);
+        a.include(&b);
+        assert_eq!(a.count(), 2);
+        let mut other = Mask::new(2, 3);
+        other.data.fill(true);
+        a.include(&other);
+        assert_eq!(a.count(), 2);
+    }
 
     #[test]
     fn hsv_matches_opencv_on_primary_and_mixed_colours() {
