@@ -240,6 +240,12 @@ window.upetrack = {
   addRect,
   pickAt,
   dloJson,
-  trackAll: async () => { await goTo(state.seq.info.color_files.length - 1); return resultJson(); },
+  // Every frame tracked under the settings in force (a change made meanwhile
+  // tracks again from where it applies), then the result.
+  trackAll: async () => {
+    const last = state.seq.info.color_files.length - 1;
+    for (let tries = 0; tries < 4 && state.tracked < last; tries++) { await goTo(last); await state.busy; }
+    return resultJson();
+  },
   ready: guarded(start)(),
 };

@@ -6,6 +6,8 @@ import { resultFile } from './core.js';
 export function resultJson() {
   // Made by the core from the records its tracker produced: the command's format, field for field.
   const kept = state.results.slice(0, state.tracked + 1);
+  const missing = kept.findIndex((r) => !r);
+  if (missing >= 0 || kept.length < state.tracked + 1) throw new Error(`frame ${missing >= 0 ? missing : kept.length} is not tracked yet: track the sequence again`);
   const records = kept.map((r) => r.record);
   // Several ropes: every rope's records too.
   const ropes = (state.seq.info.ropes || []).map((x, k) => ({ name: x.name, records: kept.map((r) => r.ropes[k].record) }));

@@ -1,7 +1,7 @@
 // The side panels and the mouse on the image: the algorithm choice, the
 // parameters, the HSV range (typed or picked by clicking the rope) and the
 // drawn occlusion rectangles. Every value is checked by the core before use.
-import { state, $, guarded, settleLookahead } from './state.js';
+import { state, $, guarded, settleLookahead, afterBusy } from './state.js';
 import { call } from './worker-client.js';
 import { Request } from './protocol.js';
 import { canvas, draw, drawDragged } from './draw.js';
@@ -83,9 +83,10 @@ export async function addRopeAt(x, y) {
   const f = state.frame;
   const k = 4 * (y * f.width + x);
   const hsv = hsvRangeAround(f.rgba[k], f.rgba[k + 1], f.rgba[k + 2]);
-  await state.busy;
-  await settleLookahead();
-  const { ropes } = await call(Request.addRope(hsv, [x, y]));
+  const { ropes } = await afterBusy(async () => {
+    await settleLookahead();
+    return call(Request.addRope(hsv, [x, y]));
+  });
   const info = state.seq.info;
   const known = info.ropes && info.ropes.length ? info.ropes : [{ groundtruth: info.groundtruth }];
   info.ropes = ropes.map((r, k) => ({ ...r, groundtruth: known[k] ? known[k].groundtruth : [] }));

@@ -55,6 +55,9 @@ async function goToNow(i) {
   const n = state.seq.info.color_files.length;
   i = Math.max(0, Math.min(n - 1, i));
   const generation = state.generation;
+  // Settings changed while these frames were tracked: what follows was
+  // tracked under the old ones, and the page tracks again from the kept frame.
+  const epoch = state.epoch;
   let r = null;
   if (i <= state.tracked) {
     r = await requestFrame(i, false);
@@ -65,7 +68,7 @@ async function goToNow(i) {
       const usable = look && look.index === k && look.epoch === state.epoch && look.generation === generation;
       if (!usable && look) await settleLookahead();
       r = await (usable ? look.promise : requestFrame(k, true));
-      if (generation !== state.generation) return;
+      if (generation !== state.generation || epoch !== state.epoch) return;
       state.results[k] = keep(r);
       state.tracked = k;
       noteRopeFinding(k, r);
@@ -83,7 +86,7 @@ async function goToNow(i) {
     }
     progress(null);
   }
-  if (generation !== state.generation) return;
+  if (generation !== state.generation || epoch !== state.epoch) return;
   state.index = i;
   state.frame = {
     width: r.width, height: r.height, rgba: new Uint8ClampedArray(r.rgba),

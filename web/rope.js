@@ -2,7 +2,7 @@
 // (several rope-shaped candidates, or none), a click on the rope choosing
 // it (with "Pick rope colour", which also takes its colour), and the rope's
 // length and diameter when the user knows them (dlo.json's "rope").
-import { state, $, showNote } from './state.js';
+import { state, $, showNote, afterBusy } from './state.js';
 import { call } from './worker-client.js';
 import { Request } from './protocol.js';
 import { retrackFromHere } from './playback.js';
@@ -44,10 +44,11 @@ export function noteRopeFinding(k, r) {
 // The rope through pixel (x, y): the colour range around it (`hsv`, picked
 // by the caller) and the candidate through it, from the shown frame on.
 export async function chooseRopeAt(x, y, hsv) {
-  await state.busy;
-  await call(Request.hsv(hsv));
-  state.hsv = hsv;
-  await call(Request.rope([x, y], state.rope));
+  await afterBusy(async () => {
+    await call(Request.hsv(hsv));
+    state.hsv = hsv;
+    await call(Request.rope([x, y], state.rope));
+  });
   return retrackFromHere(true);
 }
 
@@ -77,9 +78,10 @@ export function bindRopePanel(guarded) {
       setRopeInputs(state.rope);
       throw err;
     }
-    await state.busy;
-    await call(Request.rope(null, rope));
-    state.rope = rope;
+    await afterBusy(async () => {
+      await call(Request.rope(null, rope));
+      state.rope = rope;
+    });
     await retrackFromHere(true);
   });
 }

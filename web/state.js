@@ -33,6 +33,15 @@ export const state = {
   note: false,        // the banner shows a hint (showNote), not an error
 };
 
+// Runs `fn` once the work queued on the page is done, and queues what comes
+// later after it: a change of settings is never interleaved with frames
+// being tracked, and a script waiting on `state.busy` waits for it too.
+export function afterBusy(fn) {
+  const step = state.busy.then(fn);
+  state.busy = step.catch(() => {});
+  return step;
+}
+
 // Waits for every frame requested ahead to come back (tracked by the worker
 // with the state it had) and forgets them: a restore or a new tracker sent
 // after this cannot overtake them.

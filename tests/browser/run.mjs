@@ -245,6 +245,41 @@ await test('going back on the timeline and changing a setting re-tracks from tha
   await page.close();
 });
 
+await test('a setting changed while every frame is tracked: the result is whole and tracked under the new setting', async () => {
+  // Caught a result with holes: frames tracked under the old setting kept
+  // being written after the change had dropped them.
+  const page = await newPage('?sample=dynamic-pull&autoplay=0');
+  const r = await page.evaluate(async () => {
+    const u = window.upetrack;
+    const setRadius = (mm) => {
+      document.getElementById('p-visibility_radius').value = String(mm);
+      document.getElementById('params').dispatchEvent(new Event('change'));
+    };
+    const n = u.state.seq.info.color_files.length;
+    const raced = u.trackAll();
+    while (u.state.tracked < 8) await new Promise((res) => setTimeout(res, 5));
+    setRadius(8);
+    let result;
+    try { result = await raced; } catch (e) { return { failure: e.message }; }
+    const during = result.frames.map((f) => JSON.stringify(f.nodes));
+    await u.goTo(0);
+    setRadius(20);
+    await new Promise((res) => setTimeout(res, 100));
+    await u.state.busy;
+    setRadius(8);
+    await new Promise((res) => setTimeout(res, 100));
+    await u.state.busy;
+    const calm = (await u.trackAll()).frames.map((f) => JSON.stringify(f.nodes));
+    return { n, during, calm, errors: u.state.errors };
+  });
+  assert(!r.failure, `the result after the change: ${r.failure}`);
+  assert(r.errors.length === 0, `errors: ${r.errors}`);
+  assert(r.during.length === r.n, `${r.during.length} of ${r.n} frames in the result`);
+  const differing = r.during.filter((x, k) => x !== r.calm[k]).length;
+  assert(differing === 0, `${differing} frames differ from tracking with r_vis 8 mm from the start`);
+  await page.close();
+});
+
 await test('a drawn occlusion hides nodes, which are still estimated near the truth', async () => {
   const page = await newPage('?sample=dynamic-pull&autoplay=0');
   // Cover the upper bend of the S (not occluded by the sample itself) from frame 3 on.
