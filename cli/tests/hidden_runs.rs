@@ -106,8 +106,11 @@ fn a_rope_pulled_through_an_occluder_keeps_its_length_and_tightens_the_hidden_be
         mean(&trackdlo)
     );
     assert!(max(&lengths) < 0.04, "{:.3}", max(&lengths));
-    assert!(mean(&kept) < 0.9 * mean(&grown));
-    assert!(mean(&kept) < 0.7 * mean(&trackdlo));
+    // Straightened from the pulled arm (session 42): 1.68 mm against 3.85
+    // off and 5.47 for TrackDLO; scaled as a whole towards the chord it
+    // was 3.10, which these bounds refuse.
+    assert!(mean(&kept) < 0.6 * mean(&grown));
+    assert!(mean(&kept) < 0.4 * mean(&trackdlo));
 }
 
 /// Regression for "a hidden wave unrolls while the rope rests" (drawn

@@ -519,7 +519,9 @@ impl Sequence {
         self.inner.hsv.chroma_noise
     }
 
-    /// The occluder rectangles `(x, y, w, h)` in force on frame `index`.
+    /// The occluder rectangles `(x, y, w, h)` in force on frame `index`:
+    /// what a tracker's `step(..., occlusions=...)` takes for that frame
+    /// (a tracker does not know which frame it is given).
     fn occlusions_at(&self, index: usize) -> Vec<(i64, i64, i64, i64)> {
         self.inner
             .occlusions_at(index)

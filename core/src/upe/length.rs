@@ -12,7 +12,7 @@ use super::resampling::resample;
 use super::slide::{hidden_runs, HiddenRun};
 use crate::curve::RopeCurve;
 use crate::math::{self, Vec3};
-use crate::polyline::polyline_length;
+use crate::polyline::{arc_coordinates, polyline_length, resample_uniform};
 
 /// What the stage did in one frame.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -337,18 +337,26 @@ fn length_of(mut points: impl Iterator<Item = Vec3>) -> f64 {
 /// proportion to their lengths. A rope pulled out from under an occluder
 /// takes that length from the hidden bend, which tightens.
 ///
-/// A run's new curve keeps its anchors and scales its offsets from their
-/// chord by one factor: the polyline's length grows monotonically with it
-/// (a sum of norms of affine functions is convex, and least at the chord,
-/// the shortest path), so a bisection finds it. A run asked for less than
-/// its chord is laid on the chord. An excess under [`MIN_SHORTFALL_SPACINGS`]
-/// node spacings is left (noise), and so is a rope shorter than its rest
-/// length: a polyline of `M` nodes cuts every bend, so falling short is no
-/// evidence that the hidden bend holds more (opening bends to make up the
-/// difference moved them off the rope on the tuning range).
+/// Where one of a run's two visible stretches moved away from it since
+/// `previous` (the mean of its nodes' moves along the rope, outwards) and
+/// the other less, the rope is pulled from that side: the run straightens
+/// from there and keeps its curve from the other anchor on
+/// ([`taut_from_pulled_end`]), as a rope dragged by one end across a table
+/// does. Otherwise (`previous` not of the nodes' length, nothing moved
+/// outwards) a run's new curve keeps its anchors and scales its offsets
+/// from their chord by one factor: the polyline's length grows
+/// monotonically with it (a sum of norms of affine functions is convex,
+/// and least at the chord, the shortest path), so a bisection finds it.
+/// A run asked for less than its chord is laid on the chord. An excess
+/// under [`MIN_SHORTFALL_SPACINGS`] node spacings is left (noise), and so
+/// is a rope shorter than its rest length: a polyline of `M` nodes cuts
+/// every bend, so falling short is no evidence that the hidden bend holds
+/// more (opening bends to make up the difference moved them off the rope
+/// on the tuning range).
 pub fn conserve_middle_lengths(
     nodes: &mut [Vec3],
     known: &[bool],
+    previous: &[Vec3],
     rest_length: f64,
 ) -> LengthReport {
     let mut report = LengthReport::default();
@@ -376,31 +384,18 @@ pub fn conserve_middle_lengths(
     for (run, old) in middle.iter().zip(&lengths) {
         let target = (budget * old / hidden).max(0.0);
         let curve = nodes[run.start - 1..=run.end].to_vec();
-        let mut travelled = 0.0;
-        let mut fractions = Vec::with_capacity(curve.len());
-        fractions.push(0.0);
-        for w in curve.windows(2) {
-            travelled += math::norm(&(w[1] - w[0]));
-            fractions.push(travelled / old);
-        }
-        // The bisection measures each trial without allocating it.
-        let length_at = |scale: f64| length_of(scaled_from_chord(&curve, &fractions, scale));
-        let (mut lo, mut hi) = (0.0, 1.0);
-        let scale = if target <= length_at(lo) {
-            lo
-        } else {
-            for _ in 0..BISECTION_STEPS {
-                let mid = 0.5 * (lo + hi);
-                if length_at(mid) < target {
-                    lo = mid;
-                } else {
-                    hi = mid;
-                }
+        // Taut from the pulled side, spread over the run's nodes evenly.
+        let placed = match pulled_side(nodes, known, previous, *run) {
+            Some(Side::End) => resample_uniform(&taut_from_pulled_end(&curve, target), curve.len()),
+            Some(Side::Start) => {
+                let reversed: Vec<Vec3> = curve.iter().rev().copied().collect();
+                let mut p = resample_uniform(&taut_from_pulled_end(&reversed, target), curve.len());
+                p.reverse();
+                p
             }
-            0.5 * (lo + hi)
+            None => scaled_towards_chord(&curve, *old, target),
         };
-        let placed: Vec<Vec3> = scaled_from_chord(&curve, &fractions, scale).collect();
-        if !placed.iter().all(math::is_finite) {
+        if placed.len() != curve.len() || !placed.iter().all(math::is_finite) {
             continue;
         }
         let new = polyline_length(&placed);
@@ -409,6 +404,130 @@ pub fn conserve_middle_lengths(
         nodes[run.start..run.end].copy_from_slice(&placed[1..placed.len() - 1]);
     }
     report
+}
+
+/// `curve` (a run with its two anchors, `old` long) with its offsets from
+/// the anchors' chord scaled to make it `target` long.
+fn scaled_towards_chord(curve: &[Vec3], old: f64, target: f64) -> Vec<Vec3> {
+    let mut travelled = 0.0;
+    let mut fractions = Vec::with_capacity(curve.len());
+    fractions.push(0.0);
+    for w in curve.windows(2) {
+        travelled += math::norm(&(w[1] - w[0]));
+        fractions.push(travelled / old);
+    }
+    // The bisection measures each trial without allocating it.
+    let length_at = |scale: f64| length_of(scaled_from_chord(curve, &fractions, scale));
+    let (mut lo, mut hi) = (0.0, 1.0);
+    let scale = if target <= length_at(lo) {
+        lo
+    } else {
+        for _ in 0..BISECTION_STEPS {
+            let mid = 0.5 * (lo + hi);
+            if length_at(mid) < target {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        0.5 * (lo + hi)
+    };
+    scaled_from_chord(curve, &fractions, scale).collect()
+}
+
+/// Which anchor of a run the rope is pulled from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Side {
+    Start,
+    End,
+}
+
+/// The side of `run` whose visible stretch was pulled away from it since
+/// `previous` more than the other, when one was: the move of the stretch's
+/// far node (the rope's tip, where the stretch reaches it) along the rope,
+/// outwards. Along a straight stretch the nodes slide as EM parameterises
+/// the points, so their mean move shows nothing of a pull along the rope;
+/// a tip shows it.
+fn pulled_side(nodes: &[Vec3], known: &[bool], previous: &[Vec3], run: HiddenRun) -> Option<Side> {
+    let m = nodes.len();
+    if previous.len() != m {
+        return None;
+    }
+    let (a, b) = (run.start - 1, run.end);
+    // The last known node of the stretch from `anchor` on, away from the run.
+    let far = |anchor: usize, towards_start: bool| {
+        let mut k = anchor;
+        loop {
+            let next = if towards_start {
+                k.checked_sub(1)
+            } else {
+                Some(k + 1).filter(|&j| j < m)
+            };
+            match next {
+                Some(j) if known[j] => k = j,
+                _ => return k,
+            }
+        }
+    };
+    let pull = |tip: usize, inner: usize| {
+        outwards(&nodes[tip], &nodes[inner]).map(|out| (nodes[tip] - previous[tip]).dot(&out))
+    };
+    let (s_tip, e_tip) = (far(a, true), far(b, false));
+    let start = if s_tip < a {
+        pull(s_tip, s_tip + 1)
+    } else {
+        pull(a, a + 1)
+    };
+    let end = if e_tip > b {
+        pull(e_tip, e_tip - 1)
+    } else {
+        pull(b, b - 1)
+    };
+    match (start, end) {
+        (Some(s), Some(e)) if e > 0.0 && e > s => Some(Side::End),
+        (Some(s), Some(e)) if s > 0.0 && s > e => Some(Side::Start),
+        _ => None,
+    }
+}
+
+/// The curve `run`, from a resting anchor `run[0]` to the point the rope
+/// is pulled by, `run[last]`, made `target` long: a rope dragged by one
+/// end across a table straightens from that end, and its bends farther
+/// away stay until the pull reaches them. It keeps its curve from `run[0]`
+/// up to the point from which a straight line to the pulled point makes
+/// `target` (`s + |C(s) - P|` grows with `s`, as `|C'| = 1`: a bisection
+/// finds it). Below the chord: the chord; above the curve's length: the
+/// curve.
+fn taut_from_pulled_end(run: &[Vec3], target: f64) -> Vec<Vec3> {
+    let n = run.len();
+    let old = polyline_length(run);
+    if n < 2 || !(target < old) {
+        return run.to_vec();
+    }
+    let pulled = run[n - 1];
+    let arc = arc_coordinates(run);
+    let point_at = |s: f64| {
+        let k = arc.partition_point(|&a| a <= s).clamp(1, n - 1);
+        let t =
+            ((s - arc[k - 1]) / (arc[k] - arc[k - 1]).max(math::LENGTH_EPSILON)).clamp(0.0, 1.0);
+        (k, run[k - 1] + (run[k] - run[k - 1]) * t)
+    };
+    let (mut lo, mut hi) = (0.0, old);
+    for _ in 0..BISECTION_STEPS {
+        let mid = 0.5 * (lo + hi);
+        if mid + math::norm(&(point_at(mid).1 - pulled)) < target {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let (k, at) = point_at(lo);
+    let mut out: Vec<Vec3> = run[..k].to_vec();
+    if math::norm(&(at - run[k - 1])) > math::LENGTH_EPSILON {
+        out.push(at);
+    }
+    out.push(pulled);
+    out
 }
 
 #[cfg(test)]
@@ -732,6 +851,124 @@ mod tests {
     }
 
     #[test]
+    fn a_taut_run_keeps_its_curve_from_the_resting_anchor_and_goes_straight_to_the_pull() {
+        // An L of length 2 from (0, 0) up to (0, 1), then to (1, 1), pulled
+        // by (1, 1) to 1.8: s + sqrt(1 + (1 - s)^2) = 1.8 at s = 0.775.
+        let p = |x: f64, y: f64| Vec3::new(x, y, 0.6);
+        let run = [
+            p(0.0, 0.0),
+            p(0.0, 0.5),
+            p(0.0, 1.0),
+            p(0.5, 1.0),
+            p(1.0, 1.0),
+        ];
+        let taut = taut_from_pulled_end(&run, 1.8);
+        assert_eq!(taut.len(), 4);
+        assert_eq!(taut[..2], run[..2]);
+        assert!((taut[2] - p(0.0, 0.775)).norm() < 1e-8, "{:?}", taut[2]);
+        assert_eq!(taut[3], run[4]);
+        assert!((polyline_length(&taut) - 1.8).abs() < 1e-8);
+        // Below the chord: the chord; not shorter: the curve.
+        assert_eq!(taut_from_pulled_end(&run, 1.0), alloc::vec![run[0], run[4]]);
+        assert_eq!(taut_from_pulled_end(&run, 2.5), run.to_vec());
+    }
+
+    /// Regression for "a hidden bend pulled by one end flattens as a whole"
+    /// (drawn scenes 1054 and 1059, a rope dragged while part of it is
+    /// hidden): a rope pulled by one end straightens from that end, and
+    /// the bend at the other stays where it was.
+    #[test]
+    fn a_rope_pulled_by_one_end_straightens_from_that_end_and_keeps_its_far_bend() {
+        let before = hairpin(21, 7, 0.06, 0.04);
+        let known: Vec<bool> = (0..21).map(|i| !(6..15).contains(&i)).collect();
+        let rest = polyline_length(&before) - 0.03;
+        let on_old_curve =
+            |q: &Vec3| crate::polyline::distance_to_polyline(q, &before[5..=15]).unwrap() < 1e-9;
+        // The stretch after the run (15-20) moved 1 cm outwards, along the rope.
+        let out_end = (before[15] - before[14]).normalize();
+        let mut previous = before.clone();
+        for q in &mut previous[15..] {
+            *q -= out_end * 0.01;
+        }
+        let mut pulled = before.clone();
+        assert_eq!(
+            conserve_middle_lengths(&mut pulled, &known, &previous, rest).runs,
+            1
+        );
+        // Spread back over the run's nodes, the curve loses what its chords cut.
+        let length = polyline_length(&pulled);
+        assert!(
+            length <= rest && length > 0.99 * rest,
+            "{length} for {rest}"
+        );
+        assert!(pulled[6..=8].iter().all(on_old_curve), "the far bend moved");
+        assert!(
+            !on_old_curve(&pulled[13]),
+            "the pulled side did not straighten"
+        );
+        // Pulled by the other end: the mirror image.
+        let out_start = (before[5] - before[6]).normalize();
+        let mut previous = before.clone();
+        for q in &mut previous[..=5] {
+            *q -= out_start * 0.01;
+        }
+        let mut other = before.clone();
+        conserve_middle_lengths(&mut other, &known, &previous, rest);
+        assert!(other[12..=14].iter().all(on_old_curve) && !on_old_curve(&other[7]));
+        // Nothing moved outwards (both stretches inwards, one less): scaled
+        // from the chord as a whole.
+        let mut inwards = before.clone();
+        for q in &mut inwards[15..] {
+            *q += out_end * 0.01;
+        }
+        for q in &mut inwards[..=5] {
+            *q += out_start * 0.02;
+        }
+        let (mut a, mut b) = (before.clone(), before.clone());
+        conserve_middle_lengths(&mut a, &known, &inwards, rest);
+        conserve_middle_lengths(&mut b, &known, &[], rest);
+        assert_eq!(a, b);
+        assert!(!on_old_curve(&a[7]));
+    }
+
+    /// Regression for "the pulled arm told by its nodes' mean move"
+    /// (pulled-through: a U bend whose arm is pulled along itself; EM's
+    /// nodes on a straight arm slide as they spread over its points, and the
+    /// other arm's read as the pulled one, 4.8 mm instead of 3.1).
+    #[test]
+    fn the_pulled_side_is_told_by_the_tip_of_its_stretch() {
+        let before = hairpin(21, 7, 0.06, 0.04);
+        let known: Vec<bool> = (0..21).map(|i| !(6..15).contains(&i)).collect();
+        let (out_start, out_end) = (
+            (before[5] - before[6]).normalize(),
+            (before[15] - before[14]).normalize(),
+        );
+        // The start arm's inner nodes slid out 5 mm but its tip went in 5 mm;
+        // the end arm's tip went out 1 cm, its other nodes did not move.
+        let mut previous = before.clone();
+        for q in &mut previous[1..=5] {
+            *q -= out_start * 0.005;
+        }
+        previous[0] += out_start * 0.005;
+        previous[20] -= out_end * 0.01;
+        let run = HiddenRun { start: 6, end: 15 };
+        assert_eq!(
+            pulled_side(&before, &known, &previous, run),
+            Some(Side::End)
+        );
+        // A stretch between two runs has no tip: its node farthest from the run.
+        let mut known = known;
+        known[18] = false;
+        previous[17] -= out_end * 0.02;
+        assert_eq!(
+            pulled_side(&before, &known, &previous, run),
+            Some(Side::End)
+        );
+        previous[17] = before[17];
+        assert_eq!(pulled_side(&before, &known, &previous, run), None);
+    }
+
+    #[test]
     fn a_rope_pulled_out_from_under_an_occluder_tightens_its_hidden_bend() {
         let mut nodes = hairpin(21, 7, 0.06, 0.04);
         let known: Vec<bool> = (0..21).map(|i| !(6..15).contains(&i)).collect();
@@ -739,7 +976,7 @@ mod tests {
         let total = polyline_length(&nodes);
         // The visible rope leaves 3 cm less for the bend than it holds.
         let rest = total - 0.03;
-        let r = conserve_middle_lengths(&mut nodes, &known, rest);
+        let r = conserve_middle_lengths(&mut nodes, &known, &[], rest);
         assert_eq!(r.runs, 1);
         assert!((polyline_length(&nodes) - rest).abs() < 1e-6);
         for i in (0..21).filter(|&i| known[i]) {
@@ -750,7 +987,7 @@ mod tests {
         // Fed under the occluder instead (3 cm more): left as it is.
         let mut fed = before.clone();
         assert_eq!(
-            conserve_middle_lengths(&mut fed, &known, total + 0.03).runs,
+            conserve_middle_lengths(&mut fed, &known, &[], total + 0.03).runs,
             0
         );
         assert_eq!(fed, before);
@@ -761,7 +998,7 @@ mod tests {
         let before = hairpin(21, 7, 0.06, 0.04);
         let known: Vec<bool> = (0..21).map(|i| !(6..15).contains(&i)).collect();
         let mut nodes = before.clone();
-        let r = conserve_middle_lengths(&mut nodes, &known, 0.1);
+        let r = conserve_middle_lengths(&mut nodes, &known, &[], 0.1);
         assert_eq!(r.runs, 1);
         for p in &nodes[6..15] {
             assert!((p.x - before[5].x).abs() < 1e-12, "{p:?}");
@@ -776,17 +1013,20 @@ mod tests {
         let spacing = total / 20.0;
         for rest in [total - 0.4 * spacing, f64::NAN, -1.0] {
             let mut nodes = before.clone();
-            assert_eq!(conserve_middle_lengths(&mut nodes, &known, rest).runs, 0);
+            assert_eq!(
+                conserve_middle_lengths(&mut nodes, &known, &[], rest).runs,
+                0
+            );
             assert_eq!(nodes, before);
         }
         let mut nodes = before.clone();
         nodes[3].x = f64::NAN;
         assert_eq!(
-            conserve_middle_lengths(&mut nodes, &known, total - 0.03).runs,
+            conserve_middle_lengths(&mut nodes, &known, &[], total - 0.03).runs,
             0
         );
         assert_eq!(
-            conserve_middle_lengths(&mut nodes, &known[..5], total).runs,
+            conserve_middle_lengths(&mut nodes, &known[..5], &[], total).runs,
             0
         );
     }

@@ -65,7 +65,8 @@ pub struct UpeTrackParams {
     /// The rope does not stretch: a hidden run at an end of the rope is no
     /// longer than the arc length the rest of the rope leaves of its known
     /// length, and the hidden runs between visible stretches give up what
-    /// the rope has over that length (their bends tighten). Default true.
+    /// the rope has over that length (their bends tighten; pulled from one
+    /// side, a run straightens from that side). Default true.
     pub conserve_length: bool,
     /// Move hidden runs out of free space: where the images show nothing
     /// that could hide them (`perception::evidence`). Default true.
@@ -346,7 +347,7 @@ fn run_step(
     let length = match (input.rest_length, settings.conserve_length) {
         (Some(l), true) => {
             let ends = conserve_end_lengths(&mut nodes, input.visible, l);
-            let middle = conserve_middle_lengths(&mut nodes, input.visible, l);
+            let middle = conserve_middle_lengths(&mut nodes, input.visible, &previous, l);
             LengthReport {
                 runs: ends.runs + middle.runs,
                 largest_change: ends.largest_change.max(middle.largest_change),

@@ -131,12 +131,15 @@ class Sequence:
         """Seconds: a recording's own colour time from its first message; a folder's frames at its rate from 0."""
     def frames(self) -> Frames:
         """Every frame in order as (time, (color, depth))."""
-    def occlusions_at(self, index: int) -> list[_Rect]: ...
+    def occlusions_at(self, index: int) -> list[_Rect]:
+        """The occluder rectangles (x, y, w, h) dlo.json declares on frame `index`: pass them to
+        `Tracker.step(..., occlusions=...)` for that frame (a tracker does not know which frame it is given)."""
     @property
     def ropes(self) -> list[str]:
         """The names of the ropes dlo.json lists (one name for one rope)."""
     def tracker(self, params: _Params = None, algorithm: Optional[str] = None, rope: int = 0) -> Tracker:
-        """A tracker of this sequence's rope (with several ropes, rope `rope` alone; `track` tracks them together)."""
+        """A tracker of this sequence's rope (with several ropes, rope `rope` alone; `track` tracks them together).
+        Its `step` applies the rectangles it is given: `occlusions=seq.occlusions_at(i)` for frame i."""
     def multi_tracker(self, params: _Params = None, algorithm: Optional[str] = None) -> MultiTracker:
         """A tracker of every rope dlo.json lists, together, as `upetrack track` tracks them."""
 
