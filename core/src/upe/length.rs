@@ -882,8 +882,9 @@ mod tests {
         let before = hairpin(21, 7, 0.06, 0.04);
         let known: Vec<bool> = (0..21).map(|i| !(6..15).contains(&i)).collect();
         let rest = polyline_length(&before) - 0.03;
-        let on_old_curve =
-            |q: &Vec3| crate::polyline::distance_to_polyline(q, &before[5..=15]).unwrap() < 1e-9;
+        let on_old_curve = |q: &Vec3| {
+            crate::polyline::distance_to_polyline(q, &before[5..=15]).is_some_and(|d| d < 1e-9)
+        };
         // The stretch after the run (15-20) moved 1 cm outwards, along the rope.
         let out_end = (before[15] - before[14]).normalize();
         let mut previous = before.clone();
