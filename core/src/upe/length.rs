@@ -341,7 +341,7 @@ fn length_of(mut points: impl Iterator<Item = Vec3>) -> f64 {
 /// `previous` (the mean of its nodes' moves along the rope, outwards) and
 /// the other less, the rope is pulled from that side: the run straightens
 /// from there and keeps its curve from the other anchor on
-/// ([`taut_from_pulled_end`]), as a rope dragged by one end across a table
+/// (`taut_from_pulled_end`), as a rope dragged by one end across a table
 /// does. Otherwise (`previous` not of the nodes' length, nothing moved
 /// outwards) a run's new curve keeps its anchors and scales its offsets
 /// from their chord by one factor: the polyline's length grows
