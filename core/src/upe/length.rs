@@ -338,7 +338,7 @@ fn length_of(mut points: impl Iterator<Item = Vec3>) -> f64 {
 /// takes that length from the hidden bend, which tightens.
 ///
 /// Where one of a run's two visible stretches moved away from it since
-/// `previous` (the mean of its nodes' moves along the rope, outwards) and
+/// `previous` (its tip's move along the rope, outwards: `pulled_side`) and
 /// the other less, the rope is pulled from that side: the run straightens
 /// from there and keeps its curve from the other anchor on
 /// (`taut_from_pulled_end`), as a rope dragged by one end across a table
