@@ -12,7 +12,7 @@ use super::resampling::resample;
 use super::slide::{hidden_runs, HiddenRun};
 use crate::curve::RopeCurve;
 use crate::math::{self, Vec3};
-use crate::polyline::{arc_coordinates, polyline_length, resample_uniform};
+use crate::polyline::{polyline_length, resample_uniform};
 
 /// What the stage did in one frame.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -384,18 +384,11 @@ pub fn conserve_middle_lengths(
     for (run, old) in middle.iter().zip(&lengths) {
         let target = (budget * old / hidden).max(0.0);
         let curve = nodes[run.start - 1..=run.end].to_vec();
-        // Taut from the pulled side, spread over the run's nodes evenly.
         let placed = match pulled_side(nodes, known, previous, *run) {
-            Some(Side::End) => resample_uniform(&taut_from_pulled_end(&curve, target), curve.len()),
-            Some(Side::Start) => {
-                let reversed: Vec<Vec3> = curve.iter().rev().copied().collect();
-                let mut p = resample_uniform(&taut_from_pulled_end(&reversed, target), curve.len());
-                p.reverse();
-                p
-            }
+            Some(side) => taut_spread(&curve, target, side),
             None => scaled_towards_chord(&curve, *old, target),
         };
-        if placed.len() != curve.len() || !placed.iter().all(math::is_finite) {
+        if !placed.iter().all(math::is_finite) {
             continue;
         }
         let new = polyline_length(&placed);
@@ -453,40 +446,33 @@ fn pulled_side(nodes: &[Vec3], known: &[bool], previous: &[Vec3], run: HiddenRun
     if previous.len() != m {
         return None;
     }
+    // The last known node of each stretch, away from the run (its anchor
+    // when the stretch is that one node).
     let (a, b) = (run.start - 1, run.end);
-    // The last known node of the stretch from `anchor` on, away from the run.
-    let far = |anchor: usize, towards_start: bool| {
-        let mut k = anchor;
-        loop {
-            let next = if towards_start {
-                k.checked_sub(1)
-            } else {
-                Some(k + 1).filter(|&j| j < m)
-            };
-            match next {
-                Some(j) if known[j] => k = j,
-                _ => return k,
-            }
-        }
-    };
+    let start_tip = (0..=a).rev().take_while(|&k| known[k]).last().unwrap_or(a);
+    let end_tip = (b..m).take_while(|&k| known[k]).last().unwrap_or(b);
     let pull = |tip: usize, inner: usize| {
         outwards(&nodes[tip], &nodes[inner]).map(|out| (nodes[tip] - previous[tip]).dot(&out))
     };
-    let (s_tip, e_tip) = (far(a, true), far(b, false));
-    let start = if s_tip < a {
-        pull(s_tip, s_tip + 1)
-    } else {
-        pull(a, a + 1)
-    };
-    let end = if e_tip > b {
-        pull(e_tip, e_tip - 1)
-    } else {
-        pull(b, b - 1)
-    };
-    match (start, end) {
+    match (pull(start_tip, start_tip + 1), pull(end_tip, end_tip - 1)) {
         (Some(s), Some(e)) if e > 0.0 && e > s => Some(Side::End),
         (Some(s), Some(e)) if s > 0.0 && s > e => Some(Side::Start),
         _ => None,
+    }
+}
+
+/// `curve` (a run with its anchors) made `target` long by the pull from
+/// `side` ([`taut_from_pulled_end`]), its points spread evenly over it.
+fn taut_spread(curve: &[Vec3], target: f64, side: Side) -> Vec<Vec3> {
+    match side {
+        Side::End => resample_uniform(&taut_from_pulled_end(curve, target), curve.len()),
+        Side::Start => {
+            let reversed: Vec<Vec3> = curve.iter().rev().copied().collect();
+            let mut placed =
+                resample_uniform(&taut_from_pulled_end(&reversed, target), curve.len());
+            placed.reverse();
+            placed
+        }
     }
 }
 
@@ -500,30 +486,29 @@ fn pulled_side(nodes: &[Vec3], known: &[bool], previous: &[Vec3], run: HiddenRun
 /// curve.
 fn taut_from_pulled_end(run: &[Vec3], target: f64) -> Vec<Vec3> {
     let n = run.len();
-    let old = polyline_length(run);
+    let curve = RopeCurve::polyline(run);
+    let old = curve.length();
     if n < 2 || !(target < old) {
         return run.to_vec();
     }
     let pulled = run[n - 1];
-    let arc = arc_coordinates(run);
-    let point_at = |s: f64| {
-        let k = arc.partition_point(|&a| a <= s).clamp(1, n - 1);
-        let t =
-            ((s - arc[k - 1]) / (arc[k] - arc[k - 1]).max(math::LENGTH_EPSILON)).clamp(0.0, 1.0);
-        (k, run[k - 1] + (run[k] - run[k - 1]) * t)
-    };
     let (mut lo, mut hi) = (0.0, old);
     for _ in 0..BISECTION_STEPS {
         let mid = 0.5 * (lo + hi);
-        if mid + math::norm(&(point_at(mid).1 - pulled)) < target {
+        if mid + math::norm(&(curve.at(mid) - pulled)) < target {
             lo = mid;
         } else {
             hi = mid;
         }
     }
-    let (k, at) = point_at(lo);
-    let mut out: Vec<Vec3> = run[..k].to_vec();
-    if math::norm(&(at - run[k - 1])) > math::LENGTH_EPSILON {
+    // The points up to `lo` kept (the first always), then C(lo) and P.
+    let kept = (0..n - 1)
+        .take_while(|&i| curve.arc_of(i) <= lo)
+        .count()
+        .max(1);
+    let at = curve.at(lo);
+    let mut out: Vec<Vec3> = run[..kept].to_vec();
+    if math::norm(&(at - run[kept - 1])) > math::LENGTH_EPSILON {
         out.push(at);
     }
     out.push(pulled);
