@@ -154,6 +154,7 @@ impl Params {
                 extend_under_occluders: false,
                 keep_end_run_spacing: false,
                 follow_shared_motion: false,
+                follow_emerged_ends: false,
                 ..upe
             },
             follow_camera: false,

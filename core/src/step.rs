@@ -86,6 +86,10 @@ pub struct StepInput<'a> {
     pub evidence: Option<Evidence<'a>>,
     /// The rope's length at initialisation, metres, when known.
     pub rest_length: Option<f64>,
+    /// Rope-coloured points in view that were not this rope on the last
+    /// frame it was wholly seen (a distractor beside it), carried with the
+    /// camera's motion; empty when not known.
+    pub not_rope: &'a [Vec3],
 }
 
 /// What a step produced.

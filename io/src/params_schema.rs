@@ -337,6 +337,13 @@ pub const PARAMETERS: &[ParamInfo] = &[
         ParamKind::Bool,
     ),
     p(
+        "follow_emerged_ends",
+        Upetrack,
+        "emerged ends",
+        "A hidden end follows rope in view that came out from under its occluder and no node explains (off: the paper's step)",
+        ParamKind::Bool,
+    ),
+    p(
         "rest_speed",
         Upetrack,
         "rest speed",

@@ -72,7 +72,12 @@ pub fn written_drawn_scene(seed: u64, frames: usize) -> (Sequence<FolderSource>,
 /// Every frame's error (mm) of `seq` tracked with the default parameters
 /// from its files.
 pub fn frame_errors(seq: &Sequence<FolderSource>) -> Vec<f64> {
-    let mut tracker = Tracker::new(Params::default(), seq.camera, seq.hsv).expect("tracker");
+    frame_errors_with(seq, Params::default())
+}
+
+/// Every frame's error (mm) of `seq` tracked with `params` from its files.
+pub fn frame_errors_with(seq: &Sequence<FolderSource>, params: Params) -> Vec<f64> {
+    let mut tracker = Tracker::new(params, seq.camera, seq.hsv).expect("tracker");
     (0..seq.groundtruth.len())
         .map(|k| {
             let decoded = seq.frame(k).expect("frame");

@@ -33,6 +33,10 @@ pub const MIN_WINDOW_PX: i64 = 2;
 /// Largest half-width of that window, pixels (caps the cost per point).
 pub const MAX_WINDOW_PX: i64 = 12;
 
+/// Opposite pairs of directions [`Evidence::hidden_around`] looks in
+/// (four pairs: every 45 degrees round the circle).
+pub const AROUND_DIRECTIONS: usize = 4;
+
 /// What the images say about a point.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Sight {
@@ -104,6 +108,59 @@ impl Evidence<'_> {
         }
         let raw = self.frame.depth[(v * self.frame.width as i64 + u) as usize];
         raw != 0 && (raw as f64) * self.frame.depth_scale < p.z - OCCLUDER_MARGIN
+    }
+
+    /// `true` when something hides the rope within `reach` metres of `p`
+    /// across the viewing direction: a declared rectangle or another rope
+    /// at one of the pixels half-way and all the way round a circle of that
+    /// radius (in [`AROUND_DIRECTIONS`] directions), or a surface there
+    /// nearer than the table behind `p` by [`OCCLUDER_MARGIN`]. The table
+    /// there is not taken at `p`'s depth (a table tilted 30 degrees to the
+    /// camera is 1.2 cm nearer 2 cm up the image): each pixel is paired
+    /// with the one opposite, whose depths sum, on any plane, to twice the
+    /// plane's depth at the centre, there a radius behind `p`; a pair whose
+    /// sum falls short of that by the margin has something in front. Rope
+    /// pixels and pixels without depth say nothing.
+    pub fn hidden_around(&self, p: &Vec3, reach: f64) -> bool {
+        let Some(q) = self.camera.project(p) else {
+            return false;
+        };
+        if !(reach > 0.0) || !(p.z > 0.0) {
+            return false;
+        }
+        let focal = 0.5 * (self.camera.fx + self.camera.fy);
+        let px = reach * focal / p.z;
+        let (w, h) = (self.frame.width as i64, self.frame.height as i64);
+        let pixel = |du: f64, dv: f64| {
+            let (u, v) = (libm::round(q.x + du) as i64, libm::round(q.y + dv) as i64);
+            (u >= 0 && v >= 0 && u < w && v < h).then_some((u, v))
+        };
+        let covered = |(u, v): (i64, i64)| {
+            self.occlusions.iter().any(|r| r.contains(u, v)) || self.other_rope_at(u, v)
+        };
+        // A depth that can stand for the table: measured and not rope.
+        let depth = |(u, v): (i64, i64)| {
+            let raw = self.frame.depth[(v * w + u) as usize];
+            (raw != 0 && !self.mask.get(u, v)).then_some(raw as f64 * self.frame.depth_scale)
+        };
+        let table_sum = 2.0 * (p.z + self.radius);
+        (0..AROUND_DIRECTIONS).any(|k| {
+            let a = core::f64::consts::PI * k as f64 / AROUND_DIRECTIONS as f64;
+            let (c, s) = (libm::cos(a), libm::sin(a));
+            [0.5, 1.0].iter().any(|share| {
+                let (du, dv) = (c * px * share, s * px * share);
+                let (Some(one), Some(other)) = (pixel(du, dv), pixel(-du, -dv)) else {
+                    return false;
+                };
+                if covered(one) || covered(other) {
+                    return true;
+                }
+                match (depth(one), depth(other)) {
+                    (Some(a), Some(b)) => a + b < table_sum - OCCLUDER_MARGIN,
+                    _ => false,
+                }
+            })
+        })
     }
 
     /// `true` when another tracked rope covers pixel `(u, v)`.
@@ -482,5 +539,72 @@ mod tests {
         assert_eq!(sight(&flat, &Vec3::new(0.0, 0.0, z)), Sight::FreeSpace);
         let nearer = Table::new(80, 40, 40.0, 299);
         assert_eq!(sight(&nearer, &Vec3::new(0.0, 0.0, z)), Sight::Occluded);
+    }
+
+    #[test]
+    fn something_hides_the_rope_around_a_point_only_in_front_of_the_table_however_tilted() {
+        // A 80x80 camera of focal 100 px over a table tilted about 40
+        // degrees about the image's x axis: 0.6 m deep at the centre row,
+        // 5 mm deeper per row down (6 mm across). A rope point on it, 5 mm radius, at the centre.
+        let mut t = Table::new(80, 80, 100.0, 600);
+        for v in 0..80 {
+            for u in 0..80 {
+                t.depth[v * 80 + u] = (600 + 5 * (v as i64 - 40)) as u16;
+            }
+        }
+        let p = t.at(40.0, 40.0, 0.595);
+        let hidden = |t: &Table, rects: &[Rect]| {
+            t.evidence(&t.frame(), rects, 0.005).hidden_around(&p, 0.06)
+        };
+        // 6 cm at 0.595 m: 10 px, where the table is 5 cm nearer above and
+        // deeper below: no occluder, though a point at p's depth 10 px up
+        // lies 4.5 cm behind the table there.
+        assert!(!hidden(&t, &[]));
+        assert!(t
+            .evidence(&t.frame(), &[], 0.005)
+            .hides_rope_at(&t.at(40.0, 30.0, 0.595)));
+        // A box 2 cm above the table over columns 48..52: something hides.
+        let mut boxed = Table {
+            depth: t.depth.clone(),
+            ..Table::new(80, 80, 100.0, 600)
+        };
+        for v in 0..80 {
+            for u in 48..52 {
+                boxed.depth[v * 80 + u] -= 20;
+            }
+        }
+        assert!(hidden(&boxed, &[]));
+        // The same box painted as rope says nothing.
+        for v in 0..80 {
+            for u in 48..52 {
+                boxed.mask.data[v * 80 + u] = true;
+            }
+        }
+        assert!(!hidden(&boxed, &[]));
+        // A declared rectangle 5 px away does.
+        assert!(hidden(
+            &t,
+            &[Rect {
+                x: 44,
+                y: 0,
+                w: 16,
+                h: 80
+            }]
+        ));
+        assert!(!hidden(
+            &t,
+            &[Rect {
+                x: 60,
+                y: 0,
+                w: 10,
+                h: 80
+            }]
+        ));
+        // Nothing to say behind the camera or with no radius.
+        let f = t.frame();
+        let e = t.evidence(&f, &[], 0.005);
+        assert!(!e.hidden_around(&Vec3::new(0.0, 0.0, -0.5), 0.06));
+        assert!(!e.hidden_around(&p, 0.0));
+        assert!(!e.hidden_around(&p, f64::NAN));
     }
 }

@@ -37,6 +37,8 @@ pub(crate) use camera::CameraFollowing;
 pub use recovery::{RecoveryBackoff, MAX_RECOVERY_WAIT};
 pub use stepper::{StepReports, Stepper};
 
+use crate::upe::emerging;
+
 /// A tracked rope longer than this multiple of its length at
 /// initialisation contradicts the images (ropes do not stretch).
 pub const STRETCH_LIMIT: f64 = 1.2;
@@ -212,6 +214,10 @@ pub struct RopeCloud {
 struct TrackState {
     nodes: Vec<Vec3>,
     lost: bool,
+    /// Rope-coloured points in view that were not this rope on the last
+    /// frame it was wholly seen (`StepInput::not_rope`).
+    #[cfg_attr(feature = "serde", serde(default))]
+    not_rope: Vec<Vec3>,
 }
 
 /// Everything a tracker carries from one frame to the next, to go back to
@@ -343,7 +349,7 @@ impl Tracker {
     /// The tracked nodes moved as points at rest move under `motion`.
     fn carry_state(&mut self, motion: &RigidMotion) {
         if let Some(state) = self.state.as_mut() {
-            for p in state.nodes.iter_mut() {
+            for p in state.nodes.iter_mut().chain(state.not_rope.iter_mut()) {
                 *p = motion.apply(p);
             }
         }
@@ -585,6 +591,7 @@ impl Tracker {
         }
 
         let prev = state.nodes.clone();
+        let not_rope = state.not_rope.clone();
         let p = &self.params;
         let classes = self.visibility(&prev, &obs.cloud);
         let visible = &classes.visible;
@@ -610,7 +617,7 @@ impl Tracker {
             self.refused_jump_cloud = None;
         }
         let camera = self.camera;
-        let input = self.step_input(&camera, frame, obs, &prev, &classes);
+        let input = self.step_input(&camera, frame, obs, &prev, &classes, &not_rope);
         let out = self.stepper.step(&input, &self.params);
         if self.contradicts_evidence(&out.nodes, &obs.cloud, &out.report) {
             if self.recovery.may_recover() {
@@ -625,9 +632,11 @@ impl Tracker {
         } else {
             self.recovery.agreed();
         }
+        let not_rope = self.not_rope_after(&out.nodes, &classes.visible, &obs.cloud);
         self.state = Some(TrackState {
             nodes: out.nodes.clone(),
             lost: false,
+            not_rope,
         });
         FrameOutput {
             nodes: out.nodes,
@@ -661,9 +670,11 @@ impl Tracker {
         obs: &'a Observation,
         previous: &'a [Vec3],
         classes: &'a NodeVisibility,
+        not_rope: &'a [Vec3],
     ) -> StepInput<'a> {
         StepInput {
             previous,
+            not_rope,
             cloud: &obs.cloud,
             visible: &classes.visible,
             partly_seen: &classes.partly_seen,
@@ -678,6 +689,26 @@ impl Tracker {
             }),
             rest_length: self.rest_length,
         }
+    }
+
+    /// What the next frames take for rope-coloured things that are not
+    /// this rope (`StepInput::not_rope`): what was taken before, and the
+    /// points of `cloud` no node explains that no hidden run of the rope
+    /// could reach (`emerging::beyond_hidden_reach`), once its length is
+    /// known.
+    fn not_rope_after(&self, nodes: &[Vec3], visible: &[bool], cloud: &[Vec3]) -> Vec<Vec3> {
+        let mut memory = self
+            .state
+            .as_ref()
+            .map_or_else(Vec::new, |s| s.not_rope.clone());
+        if let Some(l) = self.rest_length {
+            let spacing = l / nodes.len().saturating_sub(1).max(1) as f64;
+            let reach = emerging::explained_reach(spacing, self.radius());
+            let far = emerging::unexplained_points(nodes, cloud, reach);
+            let beside = emerging::beyond_hidden_reach(nodes, visible, &far, spacing);
+            emerging::remember_not_rope(&mut memory, &beside, spacing);
+        }
+        memory
     }
 
     /// `true` when the nodes after a step cannot be the rope in these
@@ -803,9 +834,11 @@ impl Tracker {
             p.visibility_min_fraction,
         );
         self.refused_jump_cloud = None;
+        let not_rope = self.not_rope_after(&init.nodes, &visible, cloud);
         self.state = Some(TrackState {
             nodes: init.nodes.clone(),
             lost: false,
+            not_rope,
         });
         self.stepper.start(&init.nodes);
         FrameOutput {
@@ -919,7 +952,8 @@ impl Tracker {
         let tracked = output.status == FrameStatus::Tracked;
         let step = (tracked && self.params.algorithm == Algorithm::Upetrack).then(|| {
             let camera = self.camera;
-            let input = self.step_input(&camera, frame, obs, &previous, &classes);
+            let not_rope = self.state.as_ref().map_or(&[][..], |s| &s.not_rope);
+            let input = self.step_input(&camera, frame, obs, &previous, &classes, not_rope);
             UpeTrackStep::explain(&input, &self.params.upetrack).1
         });
         FrameExplanation {
@@ -936,7 +970,11 @@ impl Tracker {
 impl Tracker {
     /// Makes the tracker track `nodes` (tests of what carries a state).
     pub(crate) fn track_for_test(&mut self, nodes: Vec<Vec3>) {
-        self.state = Some(TrackState { nodes, lost: false });
+        self.state = Some(TrackState {
+            nodes,
+            lost: false,
+            not_rope: Vec::new(),
+        });
     }
 }
 
@@ -955,6 +993,7 @@ mod tests {
         t.state = Some(TrackState {
             nodes: nodes.clone(),
             lost: false,
+            not_rope: Vec::new(),
         });
         (t, nodes)
     }

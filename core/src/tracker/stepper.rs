@@ -163,6 +163,7 @@ mod tests {
             camera: &CameraIntrinsics::D435I_640X480,
             evidence: None,
             rest_length: None,
+            not_rope: &[],
         };
         let out = stepper.step(&input, &Params::default());
         assert_eq!(out.nodes.len(), nodes.len());

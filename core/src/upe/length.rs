@@ -25,7 +25,7 @@ pub struct LengthReport {
 
 /// `count` points after `curve[0]` evenly spaced by `step` along `curve`,
 /// continued straight past its end.
-fn along(curve: &RopeCurve<'_>, count: usize, step: f64) -> Vec<Vec3> {
+pub(super) fn along(curve: &RopeCurve<'_>, count: usize, step: f64) -> Vec<Vec3> {
     (1..=count).map(|i| curve.at(step * i as f64)).collect()
 }
 
@@ -484,7 +484,7 @@ fn taut_spread(curve: &[Vec3], target: f64, side: Side) -> Vec<Vec3> {
 /// `target` (`s + |C(s) - P|` grows with `s`, as `|C'| = 1`: a bisection
 /// finds it). Below the chord: the chord; above the curve's length: the
 /// curve.
-fn taut_from_pulled_end(run: &[Vec3], target: f64) -> Vec<Vec3> {
+pub(super) fn taut_from_pulled_end(run: &[Vec3], target: f64) -> Vec<Vec3> {
     let n = run.len();
     let curve = RopeCurve::polyline(run);
     let old = curve.length();

@@ -6,6 +6,7 @@
 //! nodes, Eq. 6-11) and [`resampling`] (Eq. 12-15). [`UpeTrackParams`] holds
 //! the step's parameters; [`UpeTrackStep`] runs the stages.
 
+pub mod emerging;
 pub mod explain;
 pub mod free_space;
 pub mod length;
@@ -15,6 +16,7 @@ pub mod resampling;
 pub mod shared_motion;
 pub mod slide;
 
+use emerging::{follow_emerged_ends, EmergedReport};
 use free_space::{clear_free_space, FreeSpaceReport};
 use length::{
     conserve_end_lengths, conserve_middle_lengths, extend_short_ends,
@@ -128,6 +130,12 @@ pub struct UpeTrackParams {
     /// (`docs/algorithm-notes.md`); set it when the camera moves. False
     /// is the paper's step.
     pub follow_shared_motion: bool,
+    /// Lay a hidden end onto rope that came out from under its occluder
+    /// (`emerging::follow_emerged_ends`): rope in view that no node
+    /// explains, next to hidden space and within the hidden run's reach,
+    /// is where a hidden end pulled out went. Default true; false is the
+    /// paper's step (hidden nodes follow their anchors only).
+    pub follow_emerged_ends: bool,
     /// Weight of the uniform outlier component (`w`, Eq. 3). Default 0.1.
     pub outlier_weight: f64,
     /// EM stops when no node moves more than this in an iteration, metres. Default 0.1 mm.
@@ -160,6 +168,7 @@ impl Default for UpeTrackParams {
             extend_under_occluders: true,
             keep_end_run_spacing: true,
             follow_shared_motion: false,
+            follow_emerged_ends: true,
             outlier_weight: 0.1,
             em_tolerance: 1e-4,
             em_max_iterations: 10,
@@ -247,6 +256,8 @@ pub struct UpeTrackReport {
     pub free_space: FreeSpaceReport,
     /// What the ends were given back of the rope's length.
     pub extension: ExtensionReport,
+    /// Hidden ends laid onto rope that came out from under an occluder.
+    pub emerged: EmergedReport,
 }
 
 /// UPETrack's step: GMM-EM of the visible nodes, UPE of the hidden ones,
@@ -382,6 +393,27 @@ fn run_step(
         }
         _ => ExtensionReport::default(),
     };
+    let emerged = match (
+        input.rest_length,
+        &input.evidence,
+        settings.follow_emerged_ends,
+    ) {
+        (Some(l), Some(e), true) => {
+            let spacing = l / m.saturating_sub(1) as f64;
+            let reach = emerging::explained_reach(spacing, e.radius);
+            let hidden_near = |p: &Vec3, r: f64| e.hidden_around(p, r);
+            follow_emerged_ends(
+                &mut nodes,
+                input.visible,
+                input.cloud,
+                input.not_rope,
+                reach,
+                spacing,
+                &hidden_near,
+            )
+        }
+        _ => EmergedReport::default(),
+    };
     let smooth = settings.smooth_resampling;
     let kept = match (input.rest_length, keep_ends) {
         // No extension was added at a hidden end, so the hidden runs are
@@ -413,6 +445,7 @@ fn run_step(
             length,
             free_space,
             extension,
+            emerged,
         },
     }
 }
@@ -443,6 +476,7 @@ mod tests {
             camera: &camera,
             evidence: None,
             rest_length,
+            not_rope: &[],
         };
         let length = |n: &[Vec3]| n.windows(2).map(|w| (w[1] - w[0]).norm()).sum::<f64>();
         // The whole-rope cap, with the paper's resampling after it.
@@ -517,6 +551,7 @@ mod tests {
             camera: &camera,
             evidence: Some(evidence),
             rest_length: None,
+            not_rope: &[],
         };
         let p = UpeTrackParams::default();
         let on = UpeTrackStep.step(&input, &p);
@@ -579,6 +614,7 @@ mod tests {
             camera: &table.camera,
             evidence: Some(evidence),
             rest_length: Some(9.0 * spacing),
+            not_rope: &[],
         };
         UpeTrackStep.step(&input, p).report.extension
     }

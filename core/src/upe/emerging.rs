@@ -1,0 +1,608 @@
+//! A hidden end pulled out from under its occluder (this project's
+//! addition, issue 28): rope in view that no node explains, that comes out
+//! of hidden space within the reach of a hidden end run, is where that end
+//! went. The run is laid from its anchor under the occluder to the piece
+//! and along it, keeping its rest length.
+
+use alloc::vec::Vec;
+
+use super::length::{along, taut_from_pulled_end};
+use crate::curve::RopeCurve;
+use crate::math::{self, Vec3};
+use crate::polyline::polyline_length;
+
+/// Points of rope one piece is made of are at most this many rest spacings
+/// apart: a wider gap is no longer one stretch of rope the nodes could
+/// sample.
+pub const PIECE_LINK_SPACINGS: f64 = 0.5;
+
+/// A piece shorter than this many rest spacings is not taken: a run's node
+/// could not be told to lie on it rather than beside it.
+pub const MIN_PIECE_SPACINGS: f64 = 1.0;
+
+/// The hidden space a piece comes out of lies within this many rest
+/// spacings of its near tip, and none within it of its far tip.
+pub const EXIT_GAP_SPACINGS: f64 = 0.5;
+
+/// Most unexplained points looked at (the pieces are found in `O(n^2)`);
+/// more are thinned evenly.
+pub const MAX_PIECE_POINTS: usize = 512;
+
+/// A piece most of whose points (more than this share) lie within
+/// [`PIECE_LINK_SPACINGS`] of rope-coloured points that were not the rope
+/// when it was last wholly seen is that thing, not the rope.
+pub const NOT_ROPE_SHARE: f64 = 0.5;
+
+/// How far from every node a point of the cloud must be to be rope the
+/// nodes do not explain: a node spacing (the most a point on the tracked
+/// rope lies from its nearest node, twice over) and the rope's radius (the
+/// cloud's points lie on its surface, not its axis).
+pub fn explained_reach(rest_spacing: f64, radius: f64) -> f64 {
+    rest_spacing + radius.max(0.0)
+}
+
+/// The points of `cloud` farther than `reach` from every node, thinned
+/// evenly to at most [`MAX_PIECE_POINTS`].
+pub fn unexplained_points(nodes: &[Vec3], cloud: &[Vec3], reach: f64) -> Vec<Vec3> {
+    let far: Vec<Vec3> = cloud
+        .iter()
+        .filter(|p| math::is_finite(p))
+        .filter(|p| {
+            nodes
+                .iter()
+                .all(|y| (*p - y).norm_squared() > reach * reach)
+        })
+        .copied()
+        .collect();
+    thinned(far)
+}
+
+/// Most points kept of things seen beside the rope
+/// ([`remember_not_rope`]).
+pub const MAX_NOT_ROPE_POINTS: usize = 256;
+
+/// Adds to `memory` the `points` (unexplained rope-coloured points on a
+/// frame where the rope was wholly seen) not already within half a
+/// [`PIECE_LINK_SPACINGS`] link of a remembered one, up to
+/// [`MAX_NOT_ROPE_POINTS`]. Things beside the rope stay where they are, and
+/// one may be covered on the frame that would have replaced the memory.
+pub fn remember_not_rope(memory: &mut Vec<Vec3>, points: &[Vec3], rest_spacing: f64) {
+    let close = 0.5 * PIECE_LINK_SPACINGS * rest_spacing;
+    if !(close > 0.0) {
+        return;
+    }
+    for p in points.iter().filter(|p| math::is_finite(p)) {
+        if memory.len() >= MAX_NOT_ROPE_POINTS {
+            return;
+        }
+        if memory
+            .iter()
+            .all(|q| (p - q).norm_squared() > close * close)
+        {
+            memory.push(*p);
+        }
+    }
+}
+
+/// The `points` no hidden run of the rope could reach with its rest length
+/// (`rest_spacing` per node): farther from the anchor of a run at an end
+/// than its nodes' rope, and from the two anchors of a run in the middle
+/// than the rope between them. Unexplained rope-coloured points of these
+/// are something beside the rope, not rope of it.
+pub fn beyond_hidden_reach(
+    nodes: &[Vec3],
+    known: &[bool],
+    points: &[Vec3],
+    rest_spacing: f64,
+) -> Vec<Vec3> {
+    let m = nodes.len();
+    if known.len() != m || !known.iter().any(|&k| k) {
+        return Vec::new();
+    }
+    let runs = super::slide::hidden_runs(known);
+    let reaches = |p: &Vec3| {
+        runs.iter().any(|r| {
+            // A run of `k` nodes: `k` spacings of rope past an end's
+            // anchor, `k + 1` between a middle run's two.
+            let k = (r.end - r.start) as f64;
+            let to = |i: usize| math::norm(&(p - nodes[i]));
+            match (r.start.checked_sub(1), (r.end < m).then_some(r.end)) {
+                (Some(a), Some(b)) => to(a) + to(b) <= rest_spacing * (k + 1.0),
+                (Some(a), None) | (None, Some(a)) => to(a) <= rest_spacing * k,
+                (None, None) => true,
+            }
+        })
+    };
+    points.iter().filter(|p| !reaches(p)).copied().collect()
+}
+
+/// `points` thinned evenly to at most [`MAX_PIECE_POINTS`].
+fn thinned(points: Vec<Vec3>) -> Vec<Vec3> {
+    if points.len() <= MAX_PIECE_POINTS {
+        return points;
+    }
+    let stride = points.len().div_ceil(MAX_PIECE_POINTS);
+    points.into_iter().step_by(stride).collect()
+}
+
+/// What the stage did in one frame.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct EmergedReport {
+    /// Hidden end runs laid onto a piece that came out.
+    pub runs: usize,
+    /// Length of the longest piece taken, metres.
+    pub piece_length: f64,
+}
+
+/// A piece of rope in view that no node explains, as a polyline from one
+/// tip to the other (the centroids of its points in slices across the line
+/// between its tips).
+#[derive(Debug, Clone, PartialEq)]
+struct Piece {
+    line: Vec<Vec3>,
+    length: f64,
+}
+
+impl Piece {
+    /// The piece from `points` (one connected set), sliced every `slice`
+    /// metres along the line between its two farthest points.
+    fn of(points: &[Vec3], slice: f64) -> Option<Self> {
+        let farthest = |from: &Vec3| {
+            points.iter().copied().max_by(|a, b| {
+                (a - from)
+                    .norm_squared()
+                    .total_cmp(&(b - from).norm_squared())
+            })
+        };
+        let a = farthest(points.first()?)?;
+        let b = farthest(&a)?;
+        let span = math::norm(&(b - a));
+        if !(span > math::LENGTH_EPSILON) || !(slice > 0.0) {
+            return None;
+        }
+        let axis = (b - a) / span;
+        let bins = (libm::ceil(span / slice) as usize).max(1);
+        let mut sums = alloc::vec![(Vec3::zeros(), 0usize); bins];
+        for p in points {
+            let k = ((p - a).dot(&axis) / slice) as usize;
+            let (sum, n) = &mut sums[k.min(bins - 1)];
+            *sum += p;
+            *n += 1;
+        }
+        let mut line: Vec<Vec3> = core::iter::once(a)
+            .chain(
+                sums.iter()
+                    .filter(|(_, n)| *n > 0)
+                    .map(|(s, n)| s / *n as f64),
+            )
+            .chain(core::iter::once(b))
+            .collect();
+        line.dedup_by(|x, y| math::norm(&(*x - *y)) <= math::LENGTH_EPSILON);
+        let length = polyline_length(&line);
+        Some(Self { line, length })
+    }
+
+    /// The piece's line from the tip nearer `from` to the other.
+    fn line_out_from(&self, from: &Vec3) -> Vec<Vec3> {
+        let (first, last) = (self.line[0], self.line[self.line.len() - 1]);
+        let mut line = self.line.clone();
+        if (last - from).norm_squared() < (first - from).norm_squared() {
+            line.reverse();
+        }
+        line
+    }
+}
+
+/// Connected sets of `points`, linked where two are within `link`.
+fn connected_sets(points: &[Vec3], link: f64) -> Vec<Vec<Vec3>> {
+    let mut set_of: Vec<Option<usize>> = alloc::vec![None; points.len()];
+    let mut sets = Vec::new();
+    for seed in 0..points.len() {
+        if set_of[seed].is_some() {
+            continue;
+        }
+        let id = sets.len();
+        set_of[seed] = Some(id);
+        let mut members = alloc::vec![seed];
+        let mut next = 0;
+        while next < members.len() {
+            let p = points[members[next]];
+            next += 1;
+            for (j, q) in points.iter().enumerate() {
+                if set_of[j].is_none() && (q - p).norm_squared() <= link * link {
+                    set_of[j] = Some(id);
+                    members.push(j);
+                }
+            }
+        }
+        sets.push(members.into_iter().map(|i| points[i]).collect());
+    }
+    sets
+}
+
+/// Lays each hidden run at an end of the rope (`known[k]` false up to an
+/// end) onto rope that came out from under its occluder: a piece of the
+/// `cloud` that no visible node explains (within `reach`) and part of
+/// which no node does, not touching rope a visible node explains, not
+/// (for the most part) where `not_rope` saw a rope-coloured thing beside
+/// the rope when it was wholly in view, at least [`MIN_PIECE_SPACINGS`]
+/// long, coming out of hidden space (`hidden_near(p, r)`: something hides
+/// the rope within `r` of `p`; near its near tip, not near its far one), and which the run's rest length (`rest_spacing`
+/// per node) can reach along with the piece. The run's new curve keeps its
+/// old shape from the anchor and is pulled straight to the piece's near
+/// tip ([`taut_from_pulled_end`]) with what the piece leaves of its rest
+/// length, then runs along the piece; its nodes are placed `rest_spacing`
+/// apart on it. The longest piece that fits is taken, one per run.
+pub fn follow_emerged_ends(
+    nodes: &mut [Vec3],
+    known: &[bool],
+    cloud: &[Vec3],
+    not_rope: &[Vec3],
+    reach: f64,
+    rest_spacing: f64,
+    hidden_near: &dyn Fn(&Vec3, f64) -> bool,
+) -> EmergedReport {
+    let mut report = EmergedReport::default();
+    let m = nodes.len();
+    if known.len() != m
+        || m < 3
+        || !(reach > 0.0)
+        || !(rest_spacing > 0.0)
+        || !known.iter().any(|&k| k)
+        || !nodes.iter().all(math::is_finite)
+    {
+        return report;
+    }
+    let head = known.iter().take_while(|&&k| !k).count();
+    let tail = known.iter().rev().take_while(|&&k| !k).count();
+    if head == 0 && tail == 0 {
+        return report;
+    }
+    let link = PIECE_LINK_SPACINGS * rest_spacing;
+    // Each point: explained by a visible node (seen), or not; and of the
+    // latter, whether any node explains it. Points only hidden nodes
+    // explain (a hidden run left at the old exit) stay in their piece.
+    let mut candidates = Vec::new();
+    let mut seen = Vec::new();
+    for p in cloud.iter().filter(|p| math::is_finite(p)) {
+        let (mut any, mut visible) = (f64::INFINITY, f64::INFINITY);
+        for (y, &k) in nodes.iter().zip(known) {
+            let d = (p - y).norm_squared();
+            any = any.min(d);
+            if k {
+                visible = visible.min(d);
+            }
+        }
+        if visible <= reach * reach {
+            seen.push(*p);
+        } else {
+            candidates.push((*p, any > reach * reach));
+        }
+    }
+    if !candidates.iter().any(|&(_, new)| new) {
+        return report;
+    }
+    let points = thinned(candidates.iter().map(|&(p, _)| p).collect());
+    let new_at = |p: &Vec3| nodes.iter().all(|y| (p - y).norm_squared() > reach * reach);
+    let near =
+        |p: &Vec3, others: &[Vec3]| others.iter().any(|q| (p - q).norm_squared() <= link * link);
+    let mut pieces: Vec<Piece> = connected_sets(&points, link)
+        .iter()
+        // Something no node explains yet.
+        .filter(|set| set.iter().any(new_at))
+        // Rope within reach of what the visible nodes explain may be
+        // theirs, moved farther than EM followed: not a hidden end's.
+        .filter(|set| {
+            !set.iter()
+                .any(|p| seen.iter().any(|q| (p - q).norm_squared() <= reach * reach))
+        })
+        // Nor is a thing seen beside the rope when it was wholly in view.
+        .filter(|set| {
+            let known = set.iter().filter(|p| near(p, not_rope)).count();
+            (known as f64) <= NOT_ROPE_SHARE * set.len() as f64
+        })
+        .filter_map(|set| Piece::of(set, link))
+        .filter(|piece| piece.length >= MIN_PIECE_SPACINGS * rest_spacing)
+        .collect();
+    // Longest first: each run takes the longest piece that fits it.
+    pieces.sort_by(|a, b| b.length.total_cmp(&a.length));
+    let mut taken = alloc::vec![false; pieces.len()];
+    let runs = [(head, true), (tail, false)];
+    for (count, at_head) in runs.into_iter().filter(|&(c, _)| c > 0 && c < m) {
+        let anchor_index = if at_head { count } else { m - 1 - count };
+        let anchor = nodes[anchor_index];
+        // The run's old curve from its anchor outwards.
+        let old: Vec<Vec3> = if at_head {
+            nodes[..=count].iter().rev().copied().collect()
+        } else {
+            nodes[anchor_index..].to_vec()
+        };
+        let rest = rest_spacing * count as f64;
+        let choice = pieces
+            .iter()
+            .enumerate()
+            .find(|(i, piece)| !taken[*i] && fits(piece, &anchor, rest, rest_spacing, hidden_near));
+        let Some((i, piece)) = choice else {
+            continue;
+        };
+        let line = piece.line_out_from(&anchor);
+        let mut pulled = old.clone();
+        pulled.push(line[0]);
+        let mut curve = taut_from_pulled_end(&pulled, rest - piece.length);
+        curve.extend_from_slice(&line[1..]);
+        let placed = along(&RopeCurve::polyline(&curve), count, rest_spacing);
+        if placed.len() != count || !placed.iter().all(math::is_finite) {
+            continue;
+        }
+        taken[i] = true;
+        report.runs += 1;
+        report.piece_length = report.piece_length.max(piece.length);
+        if at_head {
+            for (k, p) in placed.into_iter().enumerate() {
+                nodes[count - 1 - k] = p;
+            }
+        } else {
+            nodes[m - count..].copy_from_slice(&placed);
+        }
+    }
+    report
+}
+
+/// Whether a run anchored at `anchor` with `rest` metres of rope can have
+/// come out as `piece`: the rope from the anchor to the piece's near tip
+/// and along the piece is no longer than the run (within a spacing), and
+/// the piece comes out of hidden space: there is hidden space within
+/// [`EXIT_GAP_SPACINGS`] of its near tip and none around its far tip (a
+/// bend of the run that bulges out and back under, or a dark edge along
+/// the occluder itself, has hidden space at both).
+fn fits(
+    piece: &Piece,
+    anchor: &Vec3,
+    rest: f64,
+    rest_spacing: f64,
+    hidden_near: &dyn Fn(&Vec3, f64) -> bool,
+) -> bool {
+    let line = piece.line_out_from(anchor);
+    let (near, far) = (line[0], line[line.len() - 1]);
+    let gap = math::norm(&(anchor - near));
+    if gap + piece.length > rest + rest_spacing {
+        return false;
+    }
+    let exit = EXIT_GAP_SPACINGS * rest_spacing;
+    hidden_near(&near, exit) && !hidden_near(&far, exit)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Nodes 1 cm apart along x at depth 0.6, the first `hidden` hidden.
+    fn rope(m: usize, hidden: usize) -> (Vec<Vec3>, Vec<bool>) {
+        let nodes = (0..m)
+            .map(|i| Vec3::new(0.01 * i as f64, 0.0, 0.6))
+            .collect();
+        (nodes, (0..m).map(|i| i >= hidden).collect())
+    }
+
+    /// `hides` looked at round a circle of radius `r` about `p` (eight
+    /// directions, at half and the whole radius), as
+    /// `Evidence::hidden_around` does.
+    fn around(hides: impl Fn(&Vec3) -> bool) -> impl Fn(&Vec3, f64) -> bool {
+        move |p: &Vec3, r: f64| {
+            (0..8).any(|k| {
+                let a = core::f64::consts::TAU * k as f64 / 8.0;
+                let dir = Vec3::new(libm::cos(a), libm::sin(a), 0.0);
+                [0.5, 1.0].iter().any(|s| hides(&(p + dir * (r * s))))
+            })
+        }
+    }
+
+    /// Points every millimetre from `a` to `b`.
+    fn points(a: Vec3, b: Vec3) -> Vec<Vec3> {
+        let n = (math::norm(&(b - a)) / 0.001) as usize;
+        (0..=n)
+            .map(|k| a + (b - a) * (k as f64 / n as f64))
+            .collect()
+    }
+
+    #[test]
+    fn a_hidden_end_pulled_out_from_under_its_occluder_is_laid_onto_the_rope_that_came_out() {
+        // Twenty nodes 1 cm apart, the first eight hidden under an occluder
+        // (x < 0.075, y < 0.048). The end was pulled out sideways: 2.5 cm of
+        // rope now lie in view from (0.07, 0.05) to (0.07, 0.075).
+        let (mut nodes, known) = rope(20, 8);
+        let mut cloud = points(Vec3::new(0.08, 0.0, 0.6), Vec3::new(0.19, 0.0, 0.6));
+        cloud.extend(points(
+            Vec3::new(0.07, 0.05, 0.6),
+            Vec3::new(0.07, 0.075, 0.6),
+        ));
+        let hides = around(|p: &Vec3| p.x < 0.075 && p.y < 0.048);
+        let r = follow_emerged_ends(&mut nodes, &known, &cloud, &[], 0.015, 0.01, &hides);
+        assert_eq!(r.runs, 1);
+        assert!((r.piece_length - 0.025).abs() < 1e-9, "{}", r.piece_length);
+        // Eight spacings of rope from the anchor (node 8 at x = 0.08): 5.5 cm
+        // under the occluder to the piece, then its 2.5 cm; the tip on the
+        // piece's far end.
+        assert!(
+            (nodes[0] - Vec3::new(0.07, 0.075, 0.6)).norm() < 1e-6,
+            "{:?}",
+            nodes[0]
+        );
+        assert!(
+            (nodes[2] - Vec3::new(0.07, 0.055, 0.6)).norm() < 1e-6,
+            "{:?}",
+            nodes[2]
+        );
+        // (1 cm of arc apart; the chord across the corner is shorter.)
+        for w in nodes[..=8].windows(2) {
+            let d = math::norm(&(w[1] - w[0]));
+            assert!(d <= 0.01 + 1e-9 && d > 0.005, "{d}");
+        }
+        // The visible nodes are untouched.
+        assert!(nodes[8..]
+            .iter()
+            .enumerate()
+            .all(|(k, p)| (p.x - 0.01 * (k + 8) as f64).abs() < 1e-12));
+    }
+
+    #[test]
+    fn rope_in_view_that_is_not_beside_hidden_space_or_out_of_reach_is_left() {
+        let (nodes, known) = rope(20, 8);
+        let cloud = points(Vec3::new(0.03, 0.05, 0.6), Vec3::new(0.03, 0.08, 0.6));
+        // Nothing hides the rope near the piece: a distractor on the table.
+        let mut a = nodes.clone();
+        let none = |_: &Vec3, _: f64| false;
+        assert_eq!(
+            follow_emerged_ends(&mut a, &known, &cloud, &[], 0.015, 0.01, &none).runs,
+            0
+        );
+        assert_eq!(a, nodes);
+        // Beyond what eight spacings of rope can reach.
+        let far = points(Vec3::new(0.03, 0.09, 0.6), Vec3::new(0.03, 0.13, 0.6));
+        let hides = around(|p: &Vec3| p.x < 0.075 && p.y < 0.095);
+        assert_eq!(
+            follow_emerged_ends(&mut a, &known, &far, &[], 0.015, 0.01, &hides).runs,
+            0
+        );
+        // Shorter than a spacing.
+        let short = points(Vec3::new(0.03, 0.05, 0.6), Vec3::new(0.03, 0.056, 0.6));
+        assert_eq!(
+            follow_emerged_ends(&mut a, &known, &short, &[], 0.015, 0.01, &hides).runs,
+            0
+        );
+        assert_eq!(a, nodes);
+    }
+
+    #[test]
+    fn rope_that_touches_what_a_visible_node_explains_is_not_a_hidden_ends() {
+        // The visible rope moved up faster than its nodes: its new points
+        // lie beyond reach but join points the visible nodes still explain.
+        let (mut nodes, known) = rope(20, 8);
+        let mut cloud = points(Vec3::new(0.12, 0.01, 0.6), Vec3::new(0.12, 0.06, 0.6));
+        cloud.extend(points(Vec3::new(0.08, 0.0, 0.6), Vec3::new(0.19, 0.0, 0.6)));
+        let before = nodes.clone();
+        let hides = around(|p: &Vec3| p.x < 0.125);
+        assert_eq!(
+            follow_emerged_ends(&mut nodes, &known, &cloud, &[], 0.015, 0.01, &hides).runs,
+            0
+        );
+        assert_eq!(nodes, before);
+    }
+
+    #[test]
+    fn a_bend_that_bulges_out_and_back_under_or_a_thing_seen_before_is_not_an_end_that_came_out() {
+        // The piece of the first test, but the occluder also covers y > 0.078:
+        // hidden space around both its tips, as a bend of the run bulging out
+        // of a rectangle's edge and back under, or a dark edge along a box.
+        let (nodes, known) = rope(20, 8);
+        let mut cloud = points(Vec3::new(0.08, 0.0, 0.6), Vec3::new(0.19, 0.0, 0.6));
+        let piece = points(Vec3::new(0.07, 0.05, 0.6), Vec3::new(0.07, 0.075, 0.6));
+        cloud.extend_from_slice(&piece);
+        let bulge = around(|p: &Vec3| p.x < 0.075 && (p.y < 0.048 || p.y > 0.078));
+        let mut a = nodes.clone();
+        assert_eq!(
+            follow_emerged_ends(&mut a, &known, &cloud, &[], 0.015, 0.01, &bulge).runs,
+            0
+        );
+        // Out of an occluder only at its near tip, but seen beside the rope
+        // when it was wholly in view: a thing, not rope.
+        let exit = around(|p: &Vec3| p.x < 0.075 && p.y < 0.048);
+        let mut seen_before = Vec::new();
+        remember_not_rope(&mut seen_before, &piece, 0.01);
+        assert!(seen_before.len() < piece.len(), "kept one point per 2.5 mm");
+        let r = follow_emerged_ends(&mut a, &known, &cloud, &seen_before, 0.015, 0.01, &exit);
+        assert_eq!(r.runs, 0);
+        assert_eq!(a, nodes);
+        // Half of it seen before is not enough to leave it.
+        let half: Vec<Vec3> = seen_before
+            .iter()
+            .copied()
+            .filter(|p| p.y < 0.058)
+            .collect();
+        let r = follow_emerged_ends(&mut a, &known, &cloud, &half, 0.015, 0.01, &exit);
+        assert_eq!(r.runs, 1);
+    }
+
+    #[test]
+    fn only_points_no_hidden_run_can_reach_are_beside_the_rope() {
+        // Nodes 1 cm apart, at rest 1.25 cm apart (the rope is slack); 0-2
+        // hidden (3.75 cm of rope past node 3), 10-11 hidden (3.75 cm
+        // between nodes 9 and 12, 3 cm apart).
+        let (nodes, mut known) = rope(20, 3);
+        known[10] = false;
+        known[11] = false;
+        let at = |x: f64, y: f64| Vec3::new(x, y, 0.6);
+        let points = [
+            at(0.03, 0.037),
+            at(0.03, 0.038),
+            at(0.105, 0.01),
+            at(0.105, 0.02),
+        ];
+        let beside = beyond_hidden_reach(&nodes, &known, &points, 0.0125);
+        // 3.7 cm from node 3: the end's rope reaches; 3.8: not. Via nodes
+        // 9 and 12: 2 x 1.80 cm = 3.6 cm reaches, 2 x 2.50 cm does not.
+        assert_eq!(beside, alloc::vec![points[1], points[3]]);
+        assert!(beyond_hidden_reach(&nodes, &known[..5], &points, 0.01).is_empty());
+        // Nothing hidden: everything unexplained is beside the rope.
+        assert_eq!(
+            beyond_hidden_reach(&nodes, &[true; 20], &points, 0.01),
+            points.to_vec()
+        );
+    }
+
+    #[test]
+    fn the_memory_of_things_beside_the_rope_keeps_one_point_per_place_up_to_its_cap() {
+        let mut memory = Vec::new();
+        let line = points(Vec3::new(0.0, 0.0, 0.6), Vec3::new(0.1, 0.0, 0.6));
+        remember_not_rope(&mut memory, &line, 0.01);
+        // Points at least 2.5 mm apart: 1 mm steps, every third kept.
+        assert_eq!(memory.len(), 34);
+        let again = memory.clone();
+        remember_not_rope(&mut memory, &line, 0.01);
+        assert_eq!(memory, again);
+        let far = points(Vec3::new(0.0, 0.0, 0.6), Vec3::new(10.0, 0.0, 0.6));
+        remember_not_rope(&mut memory, &far, 0.01);
+        assert_eq!(memory.len(), MAX_NOT_ROPE_POINTS);
+        let mut none = Vec::new();
+        remember_not_rope(&mut none, &line, f64::NAN);
+        assert!(none.is_empty());
+    }
+
+    #[test]
+    fn nothing_to_do_on_bad_inputs() {
+        let (mut nodes, known) = rope(6, 2);
+        let cloud = points(Vec3::new(0.0, 0.05, 0.6), Vec3::new(0.0, 0.08, 0.6));
+        let all = |_: &Vec3, _: f64| true;
+        let before = nodes.clone();
+        for (reach, spacing) in [
+            (0.0, 0.01),
+            (0.015, 0.0),
+            (f64::NAN, 0.01),
+            (0.015, f64::NAN),
+        ] {
+            assert_eq!(
+                follow_emerged_ends(&mut nodes, &known, &cloud, &[], reach, spacing, &all).runs,
+                0
+            );
+        }
+        assert_eq!(
+            follow_emerged_ends(&mut nodes, &known[..5], &cloud, &[], 0.015, 0.01, &all).runs,
+            0
+        );
+        assert_eq!(
+            follow_emerged_ends(&mut nodes, &[false; 6], &cloud, &[], 0.015, 0.01, &all).runs,
+            0
+        );
+        assert_eq!(
+            follow_emerged_ends(&mut nodes, &[true; 6], &cloud, &[], 0.015, 0.01, &all).runs,
+            0
+        );
+        assert_eq!(nodes, before);
+        let mut nan = nodes.clone();
+        nan[3].x = f64::NAN;
+        assert_eq!(
+            follow_emerged_ends(&mut nan, &known, &cloud, &[], 0.015, 0.01, &all).runs,
+            0
+        );
+    }
+}
