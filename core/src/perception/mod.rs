@@ -7,7 +7,8 @@
 //! about a point: hidden by something, or in free space), and
 //! [`ego_motion`] (the camera's own motion, from the background) with
 //! [`glance`] (whether it moved at all, cheaply), and
-//! [`sharing`] (with several ropes, which rope each pixel belongs to).
+//! [`sharing`] (with several ropes, which rope each pixel belongs to), and
+//! [`table`] (the plane the rope lies on).
 
 pub mod camera;
 pub mod ego_motion;
@@ -18,3 +19,4 @@ pub mod initialisation;
 pub mod point_cloud;
 pub mod segmentation;
 pub mod sharing;
+pub mod table;

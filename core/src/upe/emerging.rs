@@ -9,6 +9,8 @@ use alloc::vec::Vec;
 use super::length::{along, taut_from_pulled_end};
 use crate::curve::RopeCurve;
 use crate::math::{self, Vec3};
+use crate::perception::evidence::OCCLUDER_MARGIN;
+use crate::perception::table::Plane;
 use crate::polyline::polyline_length;
 
 /// Points of rope one piece is made of are at most this many rest spacings
@@ -125,6 +127,39 @@ fn thinned(points: Vec<Vec3>) -> Vec<Vec3> {
     points.into_iter().step_by(stride).collect()
 }
 
+/// `true` when a rope of radius `radius` whose axis runs through `line`
+/// lies on `table`: the median height of its points above the plane is a
+/// radius, within [`OCCLUDER_MARGIN`] (the depth a surface must be nearer
+/// by to hide a rope). The median, as one point's depth is noisier than
+/// that far away (a centimetre at 1.5 m).
+pub fn lies_on(table: &Plane, line: &[Vec3], radius: f64) -> bool {
+    let mut heights: Vec<f64> = line
+        .iter()
+        .map(|p| table.normal.dot(p) - table.offset)
+        .filter(|h| h.is_finite())
+        .collect();
+    if heights.is_empty() {
+        return false;
+    }
+    heights.sort_by(f64::total_cmp);
+    libm::fabs(heights[heights.len() / 2] - radius) <= OCCLUDER_MARGIN
+}
+
+/// What the frame shows around the rope, for [`follow_emerged_ends`].
+#[derive(Clone, Copy)]
+pub struct InView<'a> {
+    /// The rope-coloured points in view (the cloud).
+    pub cloud: &'a [Vec3],
+    /// Rope-coloured points seen beside the rope when it was wholly in
+    /// view (`StepInput::not_rope`).
+    pub not_rope: &'a [Vec3],
+    /// Whether something hides the rope within a distance of a point
+    /// (`Evidence::hidden_around`).
+    pub hidden_near: &'a dyn Fn(&Vec3, f64) -> bool,
+    /// Whether a piece of rope (its line) lies on the table ([`lies_on`]).
+    pub on_surface: &'a dyn Fn(&[Vec3]) -> bool,
+}
+
 /// What the stage did in one frame.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct EmergedReport {
@@ -226,8 +261,9 @@ fn connected_sets(points: &[Vec3], link: f64) -> Vec<Vec<Vec3>> {
 /// which no node does, not touching rope a visible node explains, not
 /// (for the most part) where `not_rope` saw a rope-coloured thing beside
 /// the rope when it was wholly in view, at least [`MIN_PIECE_SPACINGS`]
-/// long, coming out of hidden space (`hidden_near(p, r)`: something hides
-/// the rope within `r` of `p`; near its near tip, not near its far one), and which the run's rest length (`rest_spacing`
+/// long, coming out of hidden space onto the surface (`hidden_near(p, r)`:
+/// something hides the rope within `r` of `p`, near its near tip, not near
+/// its far one; `on_surface(line)`: the piece lies on the table), and which the run's rest length (`rest_spacing`
 /// per node) can reach along with the piece. The run's new curve keeps its
 /// old shape from the anchor and is pulled straight to the piece's near
 /// tip ([`taut_from_pulled_end`]) with what the piece leaves of its rest
@@ -236,12 +272,16 @@ fn connected_sets(points: &[Vec3], link: f64) -> Vec<Vec<Vec3>> {
 pub fn follow_emerged_ends(
     nodes: &mut [Vec3],
     known: &[bool],
-    cloud: &[Vec3],
-    not_rope: &[Vec3],
+    view: &InView<'_>,
     reach: f64,
     rest_spacing: f64,
-    hidden_near: &dyn Fn(&Vec3, f64) -> bool,
 ) -> EmergedReport {
+    let InView {
+        cloud,
+        not_rope,
+        hidden_near,
+        on_surface,
+    } = *view;
     let mut report = EmergedReport::default();
     let m = nodes.len();
     if known.len() != m
@@ -318,10 +358,9 @@ pub fn follow_emerged_ends(
             nodes[anchor_index..].to_vec()
         };
         let rest = rest_spacing * count as f64;
-        let choice = pieces
-            .iter()
-            .enumerate()
-            .find(|(i, piece)| !taken[*i] && fits(piece, &anchor, rest, rest_spacing, hidden_near));
+        let choice = pieces.iter().enumerate().find(|(i, piece)| {
+            !taken[*i] && fits(piece, &anchor, rest, rest_spacing, hidden_near, on_surface)
+        });
         let Some((i, piece)) = choice else {
             continue;
         };
@@ -351,16 +390,18 @@ pub fn follow_emerged_ends(
 /// Whether a run anchored at `anchor` with `rest` metres of rope can have
 /// come out as `piece`: the rope from the anchor to the piece's near tip
 /// and along the piece is no longer than the run (within a spacing), and
-/// the piece comes out of hidden space: there is hidden space within
-/// [`EXIT_GAP_SPACINGS`] of its near tip and none around its far tip (a
-/// bend of the run that bulges out and back under, or a dark edge along
-/// the occluder itself, has hidden space at both).
+/// the piece comes out of hidden space onto the surface: there is hidden
+/// space within [`EXIT_GAP_SPACINGS`] of its near tip and none around its
+/// far tip (a bend of the run that bulges out and back under has hidden
+/// space at both), and it lies on the surface (a box's dark lower edge
+/// stands above the table).
 fn fits(
     piece: &Piece,
     anchor: &Vec3,
     rest: f64,
     rest_spacing: f64,
     hidden_near: &dyn Fn(&Vec3, f64) -> bool,
+    on_surface: &dyn Fn(&[Vec3]) -> bool,
 ) -> bool {
     let line = piece.line_out_from(anchor);
     let (near, far) = (line[0], line[line.len() - 1]);
@@ -369,7 +410,7 @@ fn fits(
         return false;
     }
     let exit = EXIT_GAP_SPACINGS * rest_spacing;
-    hidden_near(&near, exit) && !hidden_near(&far, exit)
+    hidden_near(&near, exit) && !hidden_near(&far, exit) && on_surface(&line)
 }
 
 #[cfg(test)]
@@ -397,6 +438,11 @@ mod tests {
         }
     }
 
+    /// Every piece lies on the table.
+    fn on_table(_: &[Vec3]) -> bool {
+        true
+    }
+
     /// Points every millimetre from `a` to `b`.
     fn points(a: Vec3, b: Vec3) -> Vec<Vec3> {
         let n = (math::norm(&(b - a)) / 0.001) as usize;
@@ -417,7 +463,18 @@ mod tests {
             Vec3::new(0.07, 0.075, 0.6),
         ));
         let hides = around(|p: &Vec3| p.x < 0.075 && p.y < 0.048);
-        let r = follow_emerged_ends(&mut nodes, &known, &cloud, &[], 0.015, 0.01, &hides);
+        let r = follow_emerged_ends(
+            &mut nodes,
+            &known,
+            &InView {
+                cloud: &cloud,
+                not_rope: &[],
+                hidden_near: &hides,
+                on_surface: &on_table,
+            },
+            0.015,
+            0.01,
+        );
         assert_eq!(r.runs, 1);
         assert!((r.piece_length - 0.025).abs() < 1e-9, "{}", r.piece_length);
         // Eight spacings of rope from the anchor (node 8 at x = 0.08): 5.5 cm
@@ -453,7 +510,19 @@ mod tests {
         let mut a = nodes.clone();
         let none = |_: &Vec3, _: f64| false;
         assert_eq!(
-            follow_emerged_ends(&mut a, &known, &cloud, &[], 0.015, 0.01, &none).runs,
+            follow_emerged_ends(
+                &mut a,
+                &known,
+                &InView {
+                    cloud: &cloud,
+                    not_rope: &[],
+                    hidden_near: &none,
+                    on_surface: &on_table
+                },
+                0.015,
+                0.01
+            )
+            .runs,
             0
         );
         assert_eq!(a, nodes);
@@ -461,13 +530,37 @@ mod tests {
         let far = points(Vec3::new(0.03, 0.09, 0.6), Vec3::new(0.03, 0.13, 0.6));
         let hides = around(|p: &Vec3| p.x < 0.075 && p.y < 0.095);
         assert_eq!(
-            follow_emerged_ends(&mut a, &known, &far, &[], 0.015, 0.01, &hides).runs,
+            follow_emerged_ends(
+                &mut a,
+                &known,
+                &InView {
+                    cloud: &far,
+                    not_rope: &[],
+                    hidden_near: &hides,
+                    on_surface: &on_table
+                },
+                0.015,
+                0.01
+            )
+            .runs,
             0
         );
         // Shorter than a spacing.
         let short = points(Vec3::new(0.03, 0.05, 0.6), Vec3::new(0.03, 0.056, 0.6));
         assert_eq!(
-            follow_emerged_ends(&mut a, &known, &short, &[], 0.015, 0.01, &hides).runs,
+            follow_emerged_ends(
+                &mut a,
+                &known,
+                &InView {
+                    cloud: &short,
+                    not_rope: &[],
+                    hidden_near: &hides,
+                    on_surface: &on_table
+                },
+                0.015,
+                0.01
+            )
+            .runs,
             0
         );
         assert_eq!(a, nodes);
@@ -483,7 +576,19 @@ mod tests {
         let before = nodes.clone();
         let hides = around(|p: &Vec3| p.x < 0.125);
         assert_eq!(
-            follow_emerged_ends(&mut nodes, &known, &cloud, &[], 0.015, 0.01, &hides).runs,
+            follow_emerged_ends(
+                &mut nodes,
+                &known,
+                &InView {
+                    cloud: &cloud,
+                    not_rope: &[],
+                    hidden_near: &hides,
+                    on_surface: &on_table
+                },
+                0.015,
+                0.01
+            )
+            .runs,
             0
         );
         assert_eq!(nodes, before);
@@ -501,7 +606,19 @@ mod tests {
         let bulge = around(|p: &Vec3| p.x < 0.075 && (p.y < 0.048 || p.y > 0.078));
         let mut a = nodes.clone();
         assert_eq!(
-            follow_emerged_ends(&mut a, &known, &cloud, &[], 0.015, 0.01, &bulge).runs,
+            follow_emerged_ends(
+                &mut a,
+                &known,
+                &InView {
+                    cloud: &cloud,
+                    not_rope: &[],
+                    hidden_near: &bulge,
+                    on_surface: &on_table
+                },
+                0.015,
+                0.01
+            )
+            .runs,
             0
         );
         // Out of an occluder only at its near tip, but seen beside the rope
@@ -510,16 +627,54 @@ mod tests {
         let mut seen_before = Vec::new();
         remember_not_rope(&mut seen_before, &piece, 0.01);
         assert!(seen_before.len() < piece.len(), "kept one point per 2.5 mm");
-        let r = follow_emerged_ends(&mut a, &known, &cloud, &seen_before, 0.015, 0.01, &exit);
+        let r = follow_emerged_ends(
+            &mut a,
+            &known,
+            &InView {
+                cloud: &cloud,
+                not_rope: &seen_before,
+                hidden_near: &exit,
+                on_surface: &on_table,
+            },
+            0.015,
+            0.01,
+        );
         assert_eq!(r.runs, 0);
         assert_eq!(a, nodes);
+        // Its far tip not on the surface around it (a box's dark lower edge,
+        // standing above the table): not rope that came out.
+        let floating = |_: &[Vec3]| false;
+        let r = follow_emerged_ends(
+            &mut a,
+            &known,
+            &InView {
+                cloud: &cloud,
+                not_rope: &[],
+                hidden_near: &exit,
+                on_surface: &floating,
+            },
+            0.015,
+            0.01,
+        );
+        assert_eq!(r.runs, 0);
         // Half of it seen before is not enough to leave it.
         let half: Vec<Vec3> = seen_before
             .iter()
             .copied()
             .filter(|p| p.y < 0.058)
             .collect();
-        let r = follow_emerged_ends(&mut a, &known, &cloud, &half, 0.015, 0.01, &exit);
+        let r = follow_emerged_ends(
+            &mut a,
+            &known,
+            &InView {
+                cloud: &cloud,
+                not_rope: &half,
+                hidden_near: &exit,
+                on_surface: &on_table,
+            },
+            0.015,
+            0.01,
+        );
         assert_eq!(r.runs, 1);
     }
 
@@ -581,27 +736,87 @@ mod tests {
             (0.015, f64::NAN),
         ] {
             assert_eq!(
-                follow_emerged_ends(&mut nodes, &known, &cloud, &[], reach, spacing, &all).runs,
+                follow_emerged_ends(
+                    &mut nodes,
+                    &known,
+                    &InView {
+                        cloud: &cloud,
+                        not_rope: &[],
+                        hidden_near: &all,
+                        on_surface: &on_table
+                    },
+                    reach,
+                    spacing
+                )
+                .runs,
                 0
             );
         }
         assert_eq!(
-            follow_emerged_ends(&mut nodes, &known[..5], &cloud, &[], 0.015, 0.01, &all).runs,
+            follow_emerged_ends(
+                &mut nodes,
+                &known[..5],
+                &InView {
+                    cloud: &cloud,
+                    not_rope: &[],
+                    hidden_near: &all,
+                    on_surface: &on_table
+                },
+                0.015,
+                0.01
+            )
+            .runs,
             0
         );
         assert_eq!(
-            follow_emerged_ends(&mut nodes, &[false; 6], &cloud, &[], 0.015, 0.01, &all).runs,
+            follow_emerged_ends(
+                &mut nodes,
+                &[false; 6],
+                &InView {
+                    cloud: &cloud,
+                    not_rope: &[],
+                    hidden_near: &all,
+                    on_surface: &on_table
+                },
+                0.015,
+                0.01
+            )
+            .runs,
             0
         );
         assert_eq!(
-            follow_emerged_ends(&mut nodes, &[true; 6], &cloud, &[], 0.015, 0.01, &all).runs,
+            follow_emerged_ends(
+                &mut nodes,
+                &[true; 6],
+                &InView {
+                    cloud: &cloud,
+                    not_rope: &[],
+                    hidden_near: &all,
+                    on_surface: &on_table
+                },
+                0.015,
+                0.01
+            )
+            .runs,
             0
         );
         assert_eq!(nodes, before);
         let mut nan = nodes.clone();
         nan[3].x = f64::NAN;
         assert_eq!(
-            follow_emerged_ends(&mut nan, &known, &cloud, &[], 0.015, 0.01, &all).runs,
+            follow_emerged_ends(
+                &mut nan,
+                &known,
+                &InView {
+                    cloud: &cloud,
+                    not_rope: &[],
+                    hidden_near: &all,
+                    on_surface: &on_table
+                },
+                0.015,
+                0.01
+            )
+            .runs,
             0
         );
     }

@@ -45,7 +45,8 @@ pub struct StepExplanation {
     pub end_runs: Vec<bool>,
     /// The nodes after the occlusion estimate.
     pub estimated: Vec<Vec3>,
-    /// The nodes after length conservation and the free-space check.
+    /// The nodes after length conservation, the free-space check, the ends'
+    /// extension and the emerged ends.
     pub before_resampling: Vec<Vec3>,
     /// The nodes after resampling (Eq. 12-15): the step's output.
     pub resampled: Vec<Vec3>,

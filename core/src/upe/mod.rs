@@ -16,7 +16,8 @@ pub mod resampling;
 pub mod shared_motion;
 pub mod slide;
 
-use emerging::{follow_emerged_ends, EmergedReport};
+use crate::perception::table::{fit_table, Plane};
+use emerging::{follow_emerged_ends, lies_on, EmergedReport, InView};
 use free_space::{clear_free_space, FreeSpaceReport};
 use length::{
     conserve_end_lengths, conserve_middle_lengths, extend_short_ends,
@@ -402,15 +403,22 @@ fn run_step(
             let spacing = l / m.saturating_sub(1) as f64;
             let reach = emerging::explained_reach(spacing, e.radius);
             let hidden_near = |p: &Vec3, r: f64| e.hidden_around(p, r);
-            follow_emerged_ends(
-                &mut nodes,
-                input.visible,
-                input.cloud,
-                input.not_rope,
-                reach,
-                spacing,
-                &hidden_near,
-            )
+            // Fitted only when a piece is judged; no plane found: no
+            // evidence against.
+            let table: core::cell::OnceCell<Option<Plane>> = core::cell::OnceCell::new();
+            let on_surface = |line: &[Vec3]| {
+                table
+                    .get_or_init(|| fit_table(e))
+                    .as_ref()
+                    .is_none_or(|t| lies_on(t, line, e.radius))
+            };
+            let view = InView {
+                cloud: input.cloud,
+                not_rope: input.not_rope,
+                hidden_near: &hidden_near,
+                on_surface: &on_surface,
+            };
+            follow_emerged_ends(&mut nodes, input.visible, &view, reach, spacing)
         }
         _ => EmergedReport::default(),
     };
