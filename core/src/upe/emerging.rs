@@ -46,17 +46,49 @@ pub fn explained_reach(rest_spacing: f64, radius: f64) -> f64 {
 /// The points of `cloud` farther than `reach` from every node, thinned
 /// evenly to at most [`MAX_PIECE_POINTS`].
 pub fn unexplained_points(nodes: &[Vec3], cloud: &[Vec3], reach: f64) -> Vec<Vec3> {
+    let mut near = NearNodes::new(nodes, reach);
     let far: Vec<Vec3> = cloud
         .iter()
         .filter(|p| math::is_finite(p))
-        .filter(|p| {
-            nodes
-                .iter()
-                .all(|y| (*p - y).norm_squared() > reach * reach)
-        })
+        .filter(|p| !near.any(p, |_| true))
         .copied()
         .collect();
     thinned(far)
+}
+
+/// Whether a node lies within a reach of a point, the node found last
+/// tried first: the cloud's points come in runs along the rope, so most
+/// are settled by one distance instead of one per node.
+struct NearNodes<'a> {
+    nodes: &'a [Vec3],
+    reach_squared: f64,
+    last: usize,
+}
+
+impl<'a> NearNodes<'a> {
+    fn new(nodes: &'a [Vec3], reach: f64) -> Self {
+        Self {
+            nodes,
+            reach_squared: reach * reach,
+            last: 0,
+        }
+    }
+
+    /// `true` when a node `k` that `counts(k)` lies within the reach of `p`.
+    fn any(&mut self, p: &Vec3, counts: impl Fn(usize) -> bool) -> bool {
+        let within =
+            |k: usize| counts(k) && (p - self.nodes[k]).norm_squared() <= self.reach_squared;
+        if self.last < self.nodes.len() && within(self.last) {
+            return true;
+        }
+        match (0..self.nodes.len()).find(|&k| within(k)) {
+            Some(k) => {
+                self.last = k;
+                true
+            }
+            None => false,
+        }
+    }
 }
 
 /// Most points kept of things seen beside the rope
@@ -304,19 +336,12 @@ pub fn follow_emerged_ends(
     // explain (a hidden run left at the old exit) stay in their piece.
     let mut candidates = Vec::new();
     let mut seen = Vec::new();
+    let mut near = NearNodes::new(nodes, reach);
     for p in cloud.iter().filter(|p| math::is_finite(p)) {
-        let (mut any, mut visible) = (f64::INFINITY, f64::INFINITY);
-        for (y, &k) in nodes.iter().zip(known) {
-            let d = (p - y).norm_squared();
-            any = any.min(d);
-            if k {
-                visible = visible.min(d);
-            }
-        }
-        if visible <= reach * reach {
+        if near.any(p, |k| known[k]) {
             seen.push(*p);
         } else {
-            candidates.push((*p, any > reach * reach));
+            candidates.push((*p, !near.any(p, |_| true)));
         }
     }
     if !candidates.iter().any(|&(_, new)| new) {
