@@ -41,6 +41,7 @@ fuzz_target!(|data: &[u8]| {
             camera: &camera,
             evidence: None,
             rest_length: None,
+            not_rope: &[],
         },
         &params,
     );

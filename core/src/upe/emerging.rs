@@ -570,8 +570,10 @@ mod tests {
             .runs,
             0
         );
-        // Shorter than a spacing.
-        let short = points(Vec3::new(0.03, 0.05, 0.6), Vec3::new(0.03, 0.056, 0.6));
+        // Out of the occluder at its near tip only, within reach, but
+        // shorter than a spacing.
+        let short = points(Vec3::new(0.07, 0.05, 0.6), Vec3::new(0.07, 0.056, 0.6));
+        let exit = around(|p: &Vec3| p.x < 0.075 && p.y < 0.048);
         assert_eq!(
             follow_emerged_ends(
                 &mut a,
@@ -579,7 +581,7 @@ mod tests {
                 &InView {
                     cloud: &short,
                     not_rope: &[],
-                    hidden_near: &hides,
+                    hidden_near: &exit,
                     on_surface: &on_table
                 },
                 0.015,
@@ -746,6 +748,71 @@ mod tests {
         let mut none = Vec::new();
         remember_not_rope(&mut none, &line, f64::NAN);
         assert!(none.is_empty());
+    }
+
+    #[test]
+    fn random_and_non_finite_inputs_never_panic_and_leave_finite_nodes() {
+        use crate::rng::SplitMix64;
+        let mut rng = SplitMix64::new(43);
+        let odd = [f64::NAN, f64::INFINITY, -f64::INFINITY, 0.0, 1e300];
+        for round in 0..300 {
+            let m = 3 + rng.below(20) as usize;
+            let point = |rng: &mut SplitMix64| {
+                let mut p = Vec3::new(
+                    rng.range(-0.2, 0.2),
+                    rng.range(-0.2, 0.2),
+                    rng.range(0.3, 0.9),
+                );
+                if rng.below(20) == 0 {
+                    p[rng.below(3) as usize] = odd[rng.below(5) as usize];
+                }
+                p
+            };
+            let mut nodes: Vec<Vec3> = (0..m).map(|_| point(&mut rng)).collect();
+            let known: Vec<bool> = (0..m).map(|_| rng.below(2) == 0).collect();
+            let cloud: Vec<Vec3> = (0..rng.below(400)).map(|_| point(&mut rng)).collect();
+            let not_rope: Vec<Vec3> = (0..rng.below(40)).map(|_| point(&mut rng)).collect();
+            let (reach, spacing) = (rng.range(0.0, 0.05), rng.range(0.0, 0.05));
+            let hides = around(|p: &Vec3| p.x < 0.0);
+            let finite_before = nodes.iter().all(math::is_finite);
+            let before = nodes.clone();
+            let view = InView {
+                cloud: &cloud,
+                not_rope: &not_rope,
+                hidden_near: &hides,
+                on_surface: &on_table,
+            };
+            let r = follow_emerged_ends(&mut nodes, &known, &view, reach, spacing);
+            if finite_before {
+                assert!(nodes.iter().all(math::is_finite), "round {round}");
+            } else {
+                assert_eq!(r.runs, 0, "round {round}");
+                assert_eq!(nodes.len(), before.len());
+            }
+            let beside = beyond_hidden_reach(&before, &known, &cloud, spacing);
+            assert!(beside.len() <= cloud.len());
+            let mut memory = not_rope.clone();
+            remember_not_rope(&mut memory, &cloud, spacing);
+            assert!(memory.len() <= MAX_NOT_ROPE_POINTS.max(not_rope.len()));
+        }
+    }
+
+    #[test]
+    fn a_piece_lies_on_the_table_when_its_median_height_is_a_radius() {
+        // A table 0.6 m away facing the camera; a rope of 5 mm radius.
+        let table = Plane {
+            normal: Vec3::new(0.0, 0.0, -1.0),
+            offset: -0.6,
+        };
+        let at = |z: f64| points(Vec3::new(0.0, 0.0, z), Vec3::new(0.05, 0.0, z));
+        assert!(lies_on(&table, &at(0.595), 0.005));
+        // A box's edge 2 cm above the table; one noisy point does not count.
+        assert!(!lies_on(&table, &at(0.58), 0.005));
+        let mut noisy = at(0.595);
+        noisy[3].z = 0.55;
+        assert!(lies_on(&table, &noisy, 0.005));
+        assert!(!lies_on(&table, &[], 0.005));
+        assert!(!lies_on(&table, &[Vec3::new(f64::NAN, 0.0, 0.6)], 0.005));
     }
 
     #[test]
