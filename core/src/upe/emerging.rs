@@ -298,7 +298,7 @@ fn connected_sets(points: &[Vec3], link: f64) -> Vec<Vec<Vec3>> {
 /// its far one; `on_surface(line)`: the piece lies on the table), and which the run's rest length (`rest_spacing`
 /// per node) can reach along with the piece. The run's new curve keeps its
 /// old shape from the anchor and is pulled straight to the piece's near
-/// tip ([`taut_from_pulled_end`]) with what the piece leaves of its rest
+/// tip (`length::taut_from_pulled_end`) with what the piece leaves of its rest
 /// length, then runs along the piece; its nodes are placed `rest_spacing`
 /// apart on it. The longest piece that fits is taken, one per run.
 pub fn follow_emerged_ends(
