@@ -34,21 +34,14 @@ mod camera;
 mod recovery;
 mod stepper;
 pub(crate) use camera::CameraFollowing;
-pub use recovery::{RecoveryBackoff, MAX_RECOVERY_WAIT};
+pub use recovery::{
+    contradicts_evidence, RecoveryBackoff, MAX_RECOVERY_WAIT, MIN_NODES_IN_FREE_SPACE,
+    STRETCH_LIMIT, UNEXPLAINED_LIMIT, UNEXPLAINED_REACH,
+};
 pub use stepper::{StepReports, Stepper};
 
 use crate::upe::emerging;
 
-/// A tracked rope longer than this multiple of its length at
-/// initialisation contradicts the images (ropes do not stretch).
-pub const STRETCH_LIMIT: f64 = 1.2;
-/// Hidden nodes that must stay in free space for the state to contradict the images.
-pub const MIN_NODES_IN_FREE_SPACE: usize = 3;
-/// A cloud point farther than this many visibility radii from every node
-/// is rope the nodes do not explain.
-pub const UNEXPLAINED_REACH: f64 = 2.0;
-/// Share of the cloud left unexplained that contradicts the state.
-pub const UNEXPLAINED_LIMIT: f64 = 0.3;
 /// After a jump re-initialisation was refused, it is tried again only once
 /// the cloud has grown by this fraction: the attempt costs a whole
 /// initialisation, and a rope that became long enough to pass the length
@@ -632,11 +625,10 @@ impl Tracker {
         } else {
             self.recovery.agreed();
         }
-        let not_rope = self.not_rope_after(&out.nodes, &classes.visible, &obs.cloud);
         self.state = Some(TrackState {
             nodes: out.nodes.clone(),
             lost: false,
-            not_rope,
+            not_rope: self.not_rope_after(&out.nodes, &classes.visible, &obs.cloud),
         });
         FrameOutput {
             nodes: out.nodes,
@@ -691,48 +683,21 @@ impl Tracker {
         }
     }
 
-    /// What the next frames take for rope-coloured things that are not
-    /// this rope (`StepInput::not_rope`): what was taken before, and the
-    /// points of `cloud` no node explains that no hidden run of the rope
-    /// could reach (`emerging::beyond_hidden_reach`), once its length is
-    /// known.
+    /// What the next frames take for rope-coloured things beside this rope
+    /// (`StepInput::not_rope`, `emerging::remembered_beside`).
     fn not_rope_after(&self, nodes: &[Vec3], visible: &[bool], cloud: &[Vec3]) -> Vec<Vec3> {
-        let mut memory = self
-            .state
-            .as_ref()
-            .map_or_else(Vec::new, |s| s.not_rope.clone());
-        if let Some(l) = self.rest_length {
-            let spacing = l / nodes.len().saturating_sub(1).max(1) as f64;
-            let reach = emerging::explained_reach(spacing, self.radius());
-            let far = emerging::unexplained_points(nodes, cloud, reach);
-            let beside = emerging::beyond_hidden_reach(nodes, visible, &far, spacing);
-            emerging::remember_not_rope(&mut memory, &beside, spacing);
-        }
-        memory
+        let memory = self.state.as_ref().map_or(&[][..], |s| &s.not_rope);
+        let spacing = self
+            .rest_length
+            .map(|l| l / (nodes.len().max(2) - 1) as f64);
+        emerging::remembered_beside(memory, nodes, visible, cloud, spacing, self.radius())
     }
 
     /// `true` when the nodes after a step cannot be the rope in these
-    /// images: the rope stretched past [`STRETCH_LIMIT`] of its length,
-    /// most hidden nodes left in free space, or more than
-    /// [`UNEXPLAINED_LIMIT`] of the cloud far from every node.
+    /// images ([`contradicts_evidence`]).
     fn contradicts_evidence(&self, nodes: &[Vec3], cloud: &[Vec3], report: &StepReports) -> bool {
-        let stretched = self
-            .rest_length
-            .is_some_and(|l| polyline_length(nodes) > STRETCH_LIMIT * l);
-        let in_free_space = report
-            .free_space
-            .is_some_and(|f| f.left >= MIN_NODES_IN_FREE_SPACE && 2 * f.left > f.found);
         let reach = UNEXPLAINED_REACH * self.params.visibility_radius;
-        let far = cloud
-            .iter()
-            .filter(|x| {
-                nodes
-                    .iter()
-                    .all(|y| (*x - y).norm_squared() > reach * reach)
-            })
-            .count();
-        let unexplained = !cloud.is_empty() && far as f64 > UNEXPLAINED_LIMIT * cloud.len() as f64;
-        stretched || in_free_space || unexplained
+        contradicts_evidence(nodes, cloud, report, self.rest_length, reach)
     }
 
     /// [`Tracker::observe`] then [`Tracker::update`].
@@ -834,11 +799,10 @@ impl Tracker {
             p.visibility_min_fraction,
         );
         self.refused_jump_cloud = None;
-        let not_rope = self.not_rope_after(&init.nodes, &visible, cloud);
         self.state = Some(TrackState {
             nodes: init.nodes.clone(),
             lost: false,
-            not_rope,
+            not_rope: self.not_rope_after(&init.nodes, &visible, cloud),
         });
         self.stepper.start(&init.nodes);
         FrameOutput {

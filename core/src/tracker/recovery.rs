@@ -1,5 +1,47 @@
-//! How often a tracked state that contradicts the images is replaced by a
-//! rope found again: recoveries in a row back off.
+//! When a tracked state contradicts the images, and how often it is then
+//! replaced by a rope found again: recoveries in a row back off.
+
+use crate::math::Vec3;
+use crate::polyline::polyline_length;
+
+use super::StepReports;
+
+/// A tracked rope longer than this multiple of its length at
+/// initialisation contradicts the images (ropes do not stretch).
+pub const STRETCH_LIMIT: f64 = 1.2;
+/// Hidden nodes that must stay in free space for the state to contradict the images.
+pub const MIN_NODES_IN_FREE_SPACE: usize = 3;
+/// A cloud point farther than this many visibility radii from every node
+/// is rope the nodes do not explain.
+pub const UNEXPLAINED_REACH: f64 = 2.0;
+/// Share of the cloud left unexplained that contradicts the state.
+pub const UNEXPLAINED_LIMIT: f64 = 0.3;
+/// `true` when the nodes after a step cannot be the rope in these images:
+/// the rope stretched past [`STRETCH_LIMIT`] of its `rest_length`, most
+/// hidden nodes left in free space, or more than [`UNEXPLAINED_LIMIT`] of
+/// the cloud farther than `reach` from every node.
+pub fn contradicts_evidence(
+    nodes: &[Vec3],
+    cloud: &[Vec3],
+    report: &StepReports,
+    rest_length: Option<f64>,
+    reach: f64,
+) -> bool {
+    let stretched = rest_length.is_some_and(|l| polyline_length(nodes) > STRETCH_LIMIT * l);
+    let in_free_space = report
+        .free_space
+        .is_some_and(|f| f.left >= MIN_NODES_IN_FREE_SPACE && 2 * f.left > f.found);
+    let far = cloud
+        .iter()
+        .filter(|x| {
+            nodes
+                .iter()
+                .all(|y| (*x - y).norm_squared() > reach * reach)
+        })
+        .count();
+    let unexplained = !cloud.is_empty() && far as f64 > UNEXPLAINED_LIMIT * cloud.len() as f64;
+    stretched || in_free_space || unexplained
+}
 
 /// Longest wait, in frames, between recoveries from steps that contradict
 /// the images (`2^k - 1` frames after the `k`-th recovery in a row): a

@@ -150,6 +150,27 @@ pub fn beyond_hidden_reach(
     points.iter().filter(|p| !reaches(p)).copied().collect()
 }
 
+/// What a tracker remembers of things beside the rope after a frame: its
+/// `memory`, and the points of `cloud` no node explains that no hidden run
+/// could reach ([`beyond_hidden_reach`], [`remember_not_rope`]), once the
+/// rope's rest spacing is known.
+pub fn remembered_beside(
+    memory: &[Vec3],
+    nodes: &[Vec3],
+    visible: &[bool],
+    cloud: &[Vec3],
+    rest_spacing: Option<f64>,
+    radius: f64,
+) -> Vec<Vec3> {
+    let mut memory = memory.to_vec();
+    if let Some(spacing) = rest_spacing {
+        let far = unexplained_points(nodes, cloud, explained_reach(spacing, radius));
+        let beside = beyond_hidden_reach(nodes, visible, &far, spacing);
+        remember_not_rope(&mut memory, &beside, spacing);
+    }
+    memory
+}
+
 /// `points` thinned evenly to at most [`MAX_PIECE_POINTS`].
 fn thinned(points: Vec<Vec3>) -> Vec<Vec3> {
     if points.len() <= MAX_PIECE_POINTS {
