@@ -4,7 +4,7 @@
 use crate::math::Vec3;
 use crate::polyline::polyline_length;
 
-use super::StepReports;
+use super::stepper::StepReports;
 
 /// A tracked rope longer than this multiple of its length at
 /// initialisation contradicts the images (ropes do not stretch).
