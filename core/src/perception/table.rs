@@ -87,38 +87,25 @@ pub fn fit_table(evidence: &Evidence<'_>) -> Option<Plane> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::perception::camera::CameraIntrinsics;
-    use crate::perception::frame::Frame;
-    use crate::perception::segmentation::Mask;
-    use alloc::vec;
+    use crate::perception::evidence::fixture::Table;
 
     #[test]
     fn the_table_is_fitted_to_the_depth_outside_the_rope() {
-        let camera = CameraIntrinsics::D435I_640X480;
-        // A plane tilted 10 degrees about x, 0.6 m away at the centre.
+        // A plane tilted 10 degrees about x, 0.6 m away at the centre, seen
+        // by a 640x480 camera of focal 615 px.
         let tilt: f64 = 10f64.to_radians();
-        let mut depth = vec![0u16; 640 * 480];
+        let mut t = Table::new(640, 480, 615.0, 0);
         for v in 0..480 {
             for u in 0..640 {
                 let ray = Vec3::new((u as f64 - 320.0) / 615.0, (v as f64 - 240.0) / 615.0, 1.0);
                 // Plane: n . p = d with n = (0, sin, -cos), through (0, 0, 0.6).
                 let n = Vec3::new(0.0, libm::sin(tilt), -libm::cos(tilt));
-                let t = n.dot(&Vec3::new(0.0, 0.0, 0.6)) / n.dot(&ray);
-                depth[v * 640 + u] = libm::round(ray.z * t * 1000.0) as u16;
+                let d = n.dot(&Vec3::new(0.0, 0.0, 0.6)) / n.dot(&ray);
+                t.depth[v * 640 + u] = libm::round(ray.z * d * 1000.0) as u16;
             }
         }
-        let rgb = vec![0u8; 640 * 480 * 3];
-        let frame = Frame::new(640, 480, &rgb, &depth, 0.001).expect("frame");
-        let mask = Mask::new(640, 480);
-        let e = Evidence {
-            frame: &frame,
-            mask: &mask,
-            occlusions: &[],
-            camera: &camera,
-            radius: 0.0075,
-            others: None,
-        };
-        let p = fit_table(&e).expect("plane");
+        let frame = t.frame();
+        let p = fit_table(&t.evidence(&frame, &[], 0.0075)).expect("plane");
         assert!(p.normal.z < 0.0, "faces the camera: {:?}", p.normal);
         assert!(
             (p.normal.y.abs() - libm::sin(tilt)).abs() < 0.01,

@@ -6,7 +6,7 @@
 
 use alloc::vec::Vec;
 
-use super::length::{along, taut_from_pulled_end};
+use super::length::{along, end_run_from_anchor, set_end_run, taut_from_pulled_end};
 use crate::curve::RopeCurve;
 use crate::math::{self, Vec3};
 use crate::perception::evidence::OCCLUDER_MARGIN;
@@ -171,13 +171,13 @@ pub fn remembered_beside(
     memory
 }
 
-/// `points` thinned evenly to at most [`MAX_PIECE_POINTS`].
-fn thinned(points: Vec<Vec3>) -> Vec<Vec3> {
-    if points.len() <= MAX_PIECE_POINTS {
-        return points;
+/// `items` thinned evenly to at most [`MAX_PIECE_POINTS`].
+fn thinned<T>(items: Vec<T>) -> Vec<T> {
+    if items.len() <= MAX_PIECE_POINTS {
+        return items;
     }
-    let stride = points.len().div_ceil(MAX_PIECE_POINTS);
-    points.into_iter().step_by(stride).collect()
+    let stride = items.len().div_ceil(MAX_PIECE_POINTS);
+    items.into_iter().step_by(stride).collect()
 }
 
 /// `true` when a rope of radius `radius` whose axis runs through `line`
@@ -281,8 +281,9 @@ impl Piece {
     }
 }
 
-/// Connected sets of `points`, linked where two are within `link`.
-fn connected_sets(points: &[Vec3], link: f64) -> Vec<Vec<Vec3>> {
+/// Connected sets of `points` (their indices), linked where two are
+/// within `link`.
+fn connected_sets(points: &[Vec3], link: f64) -> Vec<Vec<usize>> {
     let mut set_of: Vec<Option<usize>> = alloc::vec![None; points.len()];
     let mut sets = Vec::new();
     for seed in 0..points.len() {
@@ -303,7 +304,7 @@ fn connected_sets(points: &[Vec3], link: f64) -> Vec<Vec<Vec3>> {
                 }
             }
         }
-        sets.push(members.into_iter().map(|i| points[i]).collect());
+        sets.push(members);
     }
     sets
 }
@@ -356,26 +357,30 @@ pub fn follow_emerged_ends(
     // latter, whether any node explains it. Points only hidden nodes
     // explain (a hidden run left at the old exit) stay in their piece.
     let mut candidates = Vec::new();
-    let mut seen = Vec::new();
     let mut near = NearNodes::new(nodes, reach);
     for p in cloud.iter().filter(|p| math::is_finite(p)) {
-        if near.any(p, |k| known[k]) {
-            seen.push(*p);
-        } else {
+        if !near.any(p, |k| known[k]) {
             candidates.push((*p, !near.any(p, |_| true)));
         }
     }
     if !candidates.iter().any(|&(_, new)| new) {
         return report;
     }
-    let points = thinned(candidates.iter().map(|&(p, _)| p).collect());
-    let new_at = |p: &Vec3| nodes.iter().all(|y| (p - y).norm_squared() > reach * reach);
+    // Only now (rarely) the points the visible nodes explain.
+    let seen: Vec<Vec3> = cloud
+        .iter()
+        .filter(|p| math::is_finite(p) && near.any(p, |k| known[k]))
+        .copied()
+        .collect();
+    let candidates = thinned(candidates);
+    let points: Vec<Vec3> = candidates.iter().map(|&(p, _)| p).collect();
     let near =
         |p: &Vec3, others: &[Vec3]| others.iter().any(|q| (p - q).norm_squared() <= link * link);
     let mut pieces: Vec<Piece> = connected_sets(&points, link)
-        .iter()
+        .into_iter()
         // Something no node explains yet.
-        .filter(|set| set.iter().any(new_at))
+        .filter(|set| set.iter().any(|&i| candidates[i].1))
+        .map(|set| set.into_iter().map(|i| points[i]).collect::<Vec<Vec3>>())
         // Rope within reach of what the visible nodes explain may be
         // theirs, moved farther than EM followed: not a hidden end's.
         .filter(|set| {
@@ -387,7 +392,7 @@ pub fn follow_emerged_ends(
             let known = set.iter().filter(|p| near(p, not_rope)).count();
             (known as f64) <= NOT_ROPE_SHARE * set.len() as f64
         })
-        .filter_map(|set| Piece::of(set, link))
+        .filter_map(|set| Piece::of(&set, link))
         .filter(|piece| piece.length >= MIN_PIECE_SPACINGS * rest_spacing)
         .collect();
     // Longest first: each run takes the longest piece that fits it.
@@ -395,25 +400,22 @@ pub fn follow_emerged_ends(
     let mut taken = alloc::vec![false; pieces.len()];
     let runs = [(head, true), (tail, false)];
     for (count, at_head) in runs.into_iter().filter(|&(c, _)| c > 0 && c < m) {
-        let anchor_index = if at_head { count } else { m - 1 - count };
-        let anchor = nodes[anchor_index];
-        // The run's old curve from its anchor outwards.
-        let old: Vec<Vec3> = if at_head {
-            nodes[..=count].iter().rev().copied().collect()
-        } else {
-            nodes[anchor_index..].to_vec()
-        };
+        let mut curve = end_run_from_anchor(nodes, count, at_head);
+        let anchor = curve[0];
         let rest = rest_spacing * count as f64;
-        let choice = pieces.iter().enumerate().find(|(i, piece)| {
-            !taken[*i] && fits(piece, &anchor, rest, rest_spacing, hidden_near, on_surface)
-        });
-        let Some((i, piece)) = choice else {
+        let choice = pieces
+            .iter()
+            .enumerate()
+            .filter(|&(i, _)| !taken[i])
+            .find_map(|(i, piece)| {
+                fits(piece, &anchor, rest, rest_spacing, hidden_near, on_surface)
+                    .map(|line| (i, piece.length, line))
+            });
+        let Some((i, length, line)) = choice else {
             continue;
         };
-        let line = piece.line_out_from(&anchor);
-        let mut pulled = old.clone();
-        pulled.push(line[0]);
-        let mut curve = taut_from_pulled_end(&pulled, rest - piece.length);
+        curve.push(line[0]);
+        let mut curve = taut_from_pulled_end(&curve, rest - length);
         curve.extend_from_slice(&line[1..]);
         let placed = along(&RopeCurve::polyline(&curve), count, rest_spacing);
         if placed.len() != count || !placed.iter().all(math::is_finite) {
@@ -421,14 +423,8 @@ pub fn follow_emerged_ends(
         }
         taken[i] = true;
         report.runs += 1;
-        report.piece_length = report.piece_length.max(piece.length);
-        if at_head {
-            for (k, p) in placed.into_iter().enumerate() {
-                nodes[count - 1 - k] = p;
-            }
-        } else {
-            nodes[m - count..].copy_from_slice(&placed);
-        }
+        report.piece_length = report.piece_length.max(length);
+        set_end_run(nodes, count, at_head, placed);
     }
     report
 }
@@ -440,7 +436,7 @@ pub fn follow_emerged_ends(
 /// space within [`EXIT_GAP_SPACINGS`] of its near tip and none around its
 /// far tip (a bend of the run that bulges out and back under has hidden
 /// space at both), and it lies on the surface (a box's dark lower edge
-/// stands above the table).
+/// stands above the table). Its line from the near tip when it can.
 fn fits(
     piece: &Piece,
     anchor: &Vec3,
@@ -448,15 +444,15 @@ fn fits(
     rest_spacing: f64,
     hidden_near: &dyn Fn(&Vec3, f64) -> bool,
     on_surface: &dyn Fn(&[Vec3]) -> bool,
-) -> bool {
+) -> Option<Vec<Vec3>> {
     let line = piece.line_out_from(anchor);
     let (near, far) = (line[0], line[line.len() - 1]);
     let gap = math::norm(&(anchor - near));
     if gap + piece.length > rest + rest_spacing {
-        return false;
+        return None;
     }
     let exit = EXIT_GAP_SPACINGS * rest_spacing;
-    hidden_near(&near, exit) && !hidden_near(&far, exit) && on_surface(&line)
+    (hidden_near(&near, exit) && !hidden_near(&far, exit) && on_surface(&line)).then_some(line)
 }
 
 #[cfg(test)]
@@ -484,6 +480,25 @@ mod tests {
         }
     }
 
+    /// [`follow_emerged_ends`] with a reach of 1.5 cm and a rest spacing
+    /// of 1 cm.
+    fn lay(
+        nodes: &mut [Vec3],
+        known: &[bool],
+        cloud: &[Vec3],
+        not_rope: &[Vec3],
+        hidden_near: &dyn Fn(&Vec3, f64) -> bool,
+        on_surface: &dyn Fn(&[Vec3]) -> bool,
+    ) -> EmergedReport {
+        let view = InView {
+            cloud,
+            not_rope,
+            hidden_near,
+            on_surface,
+        };
+        follow_emerged_ends(nodes, known, &view, 0.015, 0.01)
+    }
+
     /// Every piece lies on the table.
     fn on_table(_: &[Vec3]) -> bool {
         true
@@ -509,18 +524,7 @@ mod tests {
             Vec3::new(0.07, 0.075, 0.6),
         ));
         let hides = around(|p: &Vec3| p.x < 0.075 && p.y < 0.048);
-        let r = follow_emerged_ends(
-            &mut nodes,
-            &known,
-            &InView {
-                cloud: &cloud,
-                not_rope: &[],
-                hidden_near: &hides,
-                on_surface: &on_table,
-            },
-            0.015,
-            0.01,
-        );
+        let r = lay(&mut nodes, &known, &cloud, &[], &hides, &on_table);
         assert_eq!(r.runs, 1);
         assert!((r.piece_length - 0.025).abs() < 1e-9, "{}", r.piece_length);
         // Eight spacings of rope from the anchor (node 8 at x = 0.08): 5.5 cm
@@ -555,62 +559,17 @@ mod tests {
         // Nothing hides the rope near the piece: a distractor on the table.
         let mut a = nodes.clone();
         let none = |_: &Vec3, _: f64| false;
-        assert_eq!(
-            follow_emerged_ends(
-                &mut a,
-                &known,
-                &InView {
-                    cloud: &cloud,
-                    not_rope: &[],
-                    hidden_near: &none,
-                    on_surface: &on_table
-                },
-                0.015,
-                0.01
-            )
-            .runs,
-            0
-        );
+        assert_eq!(lay(&mut a, &known, &cloud, &[], &none, &on_table).runs, 0);
         assert_eq!(a, nodes);
         // Beyond what eight spacings of rope can reach.
         let far = points(Vec3::new(0.03, 0.09, 0.6), Vec3::new(0.03, 0.13, 0.6));
         let hides = around(|p: &Vec3| p.x < 0.075 && p.y < 0.095);
-        assert_eq!(
-            follow_emerged_ends(
-                &mut a,
-                &known,
-                &InView {
-                    cloud: &far,
-                    not_rope: &[],
-                    hidden_near: &hides,
-                    on_surface: &on_table
-                },
-                0.015,
-                0.01
-            )
-            .runs,
-            0
-        );
+        assert_eq!(lay(&mut a, &known, &far, &[], &hides, &on_table).runs, 0);
         // Out of the occluder at its near tip only, within reach, but
         // shorter than a spacing.
         let short = points(Vec3::new(0.07, 0.05, 0.6), Vec3::new(0.07, 0.056, 0.6));
         let exit = around(|p: &Vec3| p.x < 0.075 && p.y < 0.048);
-        assert_eq!(
-            follow_emerged_ends(
-                &mut a,
-                &known,
-                &InView {
-                    cloud: &short,
-                    not_rope: &[],
-                    hidden_near: &exit,
-                    on_surface: &on_table
-                },
-                0.015,
-                0.01
-            )
-            .runs,
-            0
-        );
+        assert_eq!(lay(&mut a, &known, &short, &[], &exit, &on_table).runs, 0);
         assert_eq!(a, nodes);
     }
 
@@ -624,19 +583,7 @@ mod tests {
         let before = nodes.clone();
         let hides = around(|p: &Vec3| p.x < 0.125);
         assert_eq!(
-            follow_emerged_ends(
-                &mut nodes,
-                &known,
-                &InView {
-                    cloud: &cloud,
-                    not_rope: &[],
-                    hidden_near: &hides,
-                    on_surface: &on_table
-                },
-                0.015,
-                0.01
-            )
-            .runs,
+            lay(&mut nodes, &known, &cloud, &[], &hides, &on_table).runs,
             0
         );
         assert_eq!(nodes, before);
@@ -653,57 +600,20 @@ mod tests {
         cloud.extend_from_slice(&piece);
         let bulge = around(|p: &Vec3| p.x < 0.075 && (p.y < 0.048 || p.y > 0.078));
         let mut a = nodes.clone();
-        assert_eq!(
-            follow_emerged_ends(
-                &mut a,
-                &known,
-                &InView {
-                    cloud: &cloud,
-                    not_rope: &[],
-                    hidden_near: &bulge,
-                    on_surface: &on_table
-                },
-                0.015,
-                0.01
-            )
-            .runs,
-            0
-        );
+        assert_eq!(lay(&mut a, &known, &cloud, &[], &bulge, &on_table).runs, 0);
         // Out of an occluder only at its near tip, but seen beside the rope
         // when it was wholly in view: a thing, not rope.
         let exit = around(|p: &Vec3| p.x < 0.075 && p.y < 0.048);
         let mut seen_before = Vec::new();
         remember_not_rope(&mut seen_before, &piece, 0.01);
         assert!(seen_before.len() < piece.len(), "kept one point per 2.5 mm");
-        let r = follow_emerged_ends(
-            &mut a,
-            &known,
-            &InView {
-                cloud: &cloud,
-                not_rope: &seen_before,
-                hidden_near: &exit,
-                on_surface: &on_table,
-            },
-            0.015,
-            0.01,
-        );
+        let r = lay(&mut a, &known, &cloud, &seen_before, &exit, &on_table);
         assert_eq!(r.runs, 0);
         assert_eq!(a, nodes);
         // Its far tip not on the surface around it (a box's dark lower edge,
         // standing above the table): not rope that came out.
         let floating = |_: &[Vec3]| false;
-        let r = follow_emerged_ends(
-            &mut a,
-            &known,
-            &InView {
-                cloud: &cloud,
-                not_rope: &[],
-                hidden_near: &exit,
-                on_surface: &floating,
-            },
-            0.015,
-            0.01,
-        );
+        let r = lay(&mut a, &known, &cloud, &[], &exit, &floating);
         assert_eq!(r.runs, 0);
         // Half of it seen before is not enough to leave it.
         let half: Vec<Vec3> = seen_before
@@ -711,18 +621,7 @@ mod tests {
             .copied()
             .filter(|p| p.y < 0.058)
             .collect();
-        let r = follow_emerged_ends(
-            &mut a,
-            &known,
-            &InView {
-                cloud: &cloud,
-                not_rope: &half,
-                hidden_near: &exit,
-                on_surface: &on_table,
-            },
-            0.015,
-            0.01,
-        );
+        let r = lay(&mut a, &known, &cloud, &half, &exit, &on_table);
         assert_eq!(r.runs, 1);
     }
 
@@ -866,71 +765,20 @@ mod tests {
             );
         }
         assert_eq!(
-            follow_emerged_ends(
-                &mut nodes,
-                &known[..5],
-                &InView {
-                    cloud: &cloud,
-                    not_rope: &[],
-                    hidden_near: &all,
-                    on_surface: &on_table
-                },
-                0.015,
-                0.01
-            )
-            .runs,
+            lay(&mut nodes, &known[..5], &cloud, &[], &all, &on_table).runs,
             0
         );
         assert_eq!(
-            follow_emerged_ends(
-                &mut nodes,
-                &[false; 6],
-                &InView {
-                    cloud: &cloud,
-                    not_rope: &[],
-                    hidden_near: &all,
-                    on_surface: &on_table
-                },
-                0.015,
-                0.01
-            )
-            .runs,
+            lay(&mut nodes, &[false; 6], &cloud, &[], &all, &on_table).runs,
             0
         );
         assert_eq!(
-            follow_emerged_ends(
-                &mut nodes,
-                &[true; 6],
-                &InView {
-                    cloud: &cloud,
-                    not_rope: &[],
-                    hidden_near: &all,
-                    on_surface: &on_table
-                },
-                0.015,
-                0.01
-            )
-            .runs,
+            lay(&mut nodes, &[true; 6], &cloud, &[], &all, &on_table).runs,
             0
         );
         assert_eq!(nodes, before);
         let mut nan = nodes.clone();
         nan[3].x = f64::NAN;
-        assert_eq!(
-            follow_emerged_ends(
-                &mut nan,
-                &known,
-                &InView {
-                    cloud: &cloud,
-                    not_rope: &[],
-                    hidden_near: &all,
-                    on_surface: &on_table
-                },
-                0.015,
-                0.01
-            )
-            .runs,
-            0
-        );
+        assert_eq!(lay(&mut nan, &known, &cloud, &[], &all, &on_table).runs, 0);
     }
 }

@@ -65,12 +65,7 @@ pub fn conserve_end_lengths(nodes: &mut [Vec3], known: &[bool], rest_length: f64
     }
     for (count, at_head) in ends {
         let share = (budget * count as f64 / total as f64).max(0.0);
-        // The run's curve from its anchor outwards.
-        let curve: Vec<Vec3> = if at_head {
-            nodes[..=count].iter().rev().copied().collect()
-        } else {
-            nodes[m - 1 - count..].to_vec()
-        };
+        let curve = end_run_from_anchor(nodes, count, at_head);
         let old = polyline_length(&curve);
         if old <= share {
             continue;
@@ -82,15 +77,34 @@ pub fn conserve_end_lengths(nodes: &mut [Vec3], known: &[bool], rest_length: f64
         // old > share >= 0 here, so the ratio is finite.
         report.largest_change = report.largest_change.max((share - old).abs() / old);
         report.runs += 1;
-        if at_head {
-            for (k, p) in placed.into_iter().enumerate() {
-                nodes[count - 1 - k] = p;
-            }
-        } else {
-            nodes[m - count..].copy_from_slice(&placed);
-        }
+        set_end_run(nodes, count, at_head, placed);
     }
     report
+}
+
+/// The hidden run of `count` nodes at the rope's first end (`at_head`) or
+/// last, as a curve from its anchor (the visible node next to it)
+/// outwards. `count` must be below the node count.
+pub(super) fn end_run_from_anchor(nodes: &[Vec3], count: usize, at_head: bool) -> Vec<Vec3> {
+    if at_head {
+        nodes[..=count].iter().rev().copied().collect()
+    } else {
+        nodes[nodes.len() - 1 - count..].to_vec()
+    }
+}
+
+/// Writes `placed` (the run's nodes from its anchor outwards, as
+/// [`end_run_from_anchor`] orders them, without the anchor) back over the
+/// run of `count` nodes at the first end (`at_head`) or the last.
+pub(super) fn set_end_run(nodes: &mut [Vec3], count: usize, at_head: bool, placed: Vec<Vec3>) {
+    let m = nodes.len();
+    if at_head {
+        for (k, p) in placed.into_iter().enumerate() {
+            nodes[count - 1 - k] = p;
+        }
+    } else {
+        nodes[m - count..].copy_from_slice(&placed);
+    }
 }
 
 /// Rope radii taken off the centre line's length at the first
