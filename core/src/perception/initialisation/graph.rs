@@ -143,6 +143,13 @@ impl SkeletonGraph {
             // branch from a zone back to it is a hole the thinning left.
             let mut merge = Sets::new(zones.len());
             let mut absorbed: Vec<(usize, &Branch)> = Vec::new();
+            // Zones whose cells touch have no branch between them to keep
+            // them apart (on a rope whose mask's edge is ragged, junctions
+            // follow each other along it): they are one zone.
+            let touching = touching_zones(grid, &cells, &zone_of);
+            for &(a, c) in &touching {
+                merge.join(a, c);
+            }
             for b in &branches {
                 if let [End::Zone(a), End::Zone(c)] = b.ends {
                     let width = b
@@ -156,7 +163,7 @@ impl SkeletonGraph {
                     }
                 }
             }
-            if !absorbed.is_empty() {
+            if !absorbed.is_empty() || !touching.is_empty() {
                 let mut groups: Vec<Zone> = vec![Zone::default(); zones.len()];
                 for (z, zone) in zones.iter().enumerate() {
                     let g = &mut groups[merge.find(z)];
@@ -225,6 +232,25 @@ impl SkeletonGraph {
         }
         zone_of
     }
+}
+
+/// Pairs of different zones with neighbouring skeleton cells.
+fn touching_zones(grid: &Grid, cells: &[usize], zone_of: &[usize]) -> Vec<(usize, usize)> {
+    let mut pairs = Vec::new();
+    for &i in cells {
+        let a = zone_of[i];
+        if a == usize::MAX {
+            continue;
+        }
+        for j in grid.ring(i) {
+            let b = zone_of[j];
+            if grid.cells[j] && b != usize::MAX && b != a && !pairs.contains(&(a.min(b), a.max(b)))
+            {
+                pairs.push((a.min(b), a.max(b)));
+            }
+        }
+    }
+    pairs
 }
 
 /// The skeleton outside the zones cut into branches, each traced in order

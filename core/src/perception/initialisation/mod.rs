@@ -621,6 +621,46 @@ mod tests {
     }
 
     #[test]
+    fn a_rope_with_a_ragged_edge_is_one_candidate_round_its_bends() {
+        // A rope 11 px wide whose texture's dark stripes cut a slit a pixel
+        // in from its edge every 5 px, alternately on each side, leaving
+        // slivers along the edge (a grey rope: drawn scene 1009 was found
+        // in two pieces cut at its bend).
+        let rope: Vec<Vec2> = curve(|t| {
+            let a = 1.5 * core::f64::consts::TAU * t;
+            Vec2::new(120.0 + 400.0 * t, 240.0 + 110.0 * libm::sin(a))
+        });
+        let mut mask = Mask::new(640, 480);
+        draw(&mut mask, &rope, 5.5);
+        let mut along = 0.0;
+        let mut next = 0.0;
+        let mut side = 1.0;
+        for w in rope.windows(2) {
+            along += (w[1] - w[0]).norm();
+            if along < next {
+                continue;
+            }
+            next += 5.0;
+            side = -side;
+            let d = (w[1] - w[0]) / (w[1] - w[0]).norm();
+            let normal = Vec2::new(-d.y, d.x) * side;
+            // A slit 3 px along the edge.
+            for depth in [4.5] {
+                for across in [-1.0, 0.0, 1.0] {
+                    let q = w[0] + normal * depth + d * across;
+                    let (u, v) = (libm::round(q.x) as usize, libm::round(q.y) as usize);
+                    mask.data[v * 640 + u] = false;
+                }
+            }
+        }
+        assert_eq!(skeleton::shapes(&mask, 1).0.len(), 1, "still one shape");
+        let found = find(&mask, None, 150, RopePrior::default());
+        assert_eq!(found.chains.len(), 1, "{} candidates", found.chains.len());
+        // Within a rope's width: the tip's extension follows a ragged end.
+        assert_follows(&found.chains[0].points, &rope, 11.0);
+    }
+
+    #[test]
     fn empty_and_tiny_masks_are_errors() {
         let mask = Mask::new(64, 48);
         assert!(matches!(
