@@ -344,6 +344,13 @@ pub const PARAMETERS: &[ParamInfo] = &[
         ParamKind::Bool,
     ),
     p(
+        "report_on_arcs",
+        Upetrack,
+        "nodes on their bends",
+        "Visible nodes are reported on their bend's arc, not at the centroid of the points they explain, which lies inside it (off: the paper's nodes)",
+        ParamKind::Bool,
+    ),
+    p(
         "rest_speed",
         Upetrack,
         "rest speed",

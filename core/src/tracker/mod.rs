@@ -631,7 +631,7 @@ impl Tracker {
             not_rope: self.not_rope_after(&out.nodes, &classes.visible, &obs.cloud),
         });
         FrameOutput {
-            nodes: out.nodes,
+            nodes: self.stepper.reported(out.nodes, &out.visible, &self.params),
             visible: out.visible,
             status: FrameStatus::Tracked,
             em: out.report.em,

@@ -6,6 +6,8 @@
 use crate::baselines::cdcpd2::{Cdcpd2Report, Cdcpd2Step};
 use crate::baselines::cpd::CpdStep;
 use crate::baselines::trackdlo::{TrackDloReport, TrackDloStep};
+use alloc::vec::Vec;
+
 use crate::math::{self, Vec3};
 use crate::params::Params;
 use crate::step::{Algorithm, StepInput, StepOutput, TrackingStep};
@@ -91,6 +93,16 @@ impl Stepper {
             #[cfg(feature = "cdcpd2")]
             Stepper::Cdcpd2(s) => s.fits(nodes),
         }
+    }
+
+    /// The nodes to report of a step's `nodes` (its state): UPETrack's
+    /// visible nodes on their bends' arcs when `report_on_arcs` is set
+    /// (`upe::bends`), every other algorithm's as they are.
+    pub fn reported(&self, mut nodes: Vec<Vec3>, visible: &[bool], params: &Params) -> Vec<Vec3> {
+        if matches!(self, Stepper::Upetrack) && params.upetrack.report_on_arcs {
+            crate::upe::bends::onto_arcs(&mut nodes, visible);
+        }
+        nodes
     }
 
     /// The step, with the algorithm's settings taken from `params`. A state

@@ -6,6 +6,7 @@
 //! nodes, Eq. 6-11) and [`resampling`] (Eq. 12-15). [`UpeTrackParams`] holds
 //! the step's parameters; [`UpeTrackStep`] runs the stages.
 
+pub mod bends;
 pub mod emerging;
 pub mod explain;
 pub mod free_space;
@@ -137,6 +138,12 @@ pub struct UpeTrackParams {
     /// is where a hidden end pulled out went. Default true; false is the
     /// paper's step (hidden nodes follow their anchors only).
     pub follow_emerged_ends: bool,
+    /// Report each visible node on its bend's arc rather than where EM
+    /// left it, the centroid of the rope points it explains, which lies
+    /// inside the bend (`bends::onto_arcs`). Only the reported nodes move:
+    /// the next frame starts from EM's. Default true; false is the paper's
+    /// nodes.
+    pub report_on_arcs: bool,
     /// Weight of the uniform outlier component (`w`, Eq. 3). Default 0.1.
     pub outlier_weight: f64,
     /// EM stops when no node moves more than this in an iteration, metres. Default 0.1 mm.
@@ -170,6 +177,7 @@ impl Default for UpeTrackParams {
             keep_end_run_spacing: true,
             follow_shared_motion: false,
             follow_emerged_ends: true,
+            report_on_arcs: true,
             outlier_weight: 0.1,
             em_tolerance: 1e-4,
             em_max_iterations: 10,

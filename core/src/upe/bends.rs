@@ -1,0 +1,167 @@
+//! Visible nodes reported on their bend's arc (this project's addition
+//! after the M-step, Eq. 5): EM puts a node at the mean of the rope points
+//! it explains, about one node spacing of rope centred on it. On a bend
+//! those points lie on an arc, and an arc's centroid lies inside it: a
+//! node on a bend of radius `R` explaining an arc of length `s` sits
+//! `R (1 - sin(theta) / theta)` inside it, `theta = s / (2 R)`, about
+//! `s^2 / (24 R)` (1 mm for a 35 mm spacing on a bend of 5 cm). The
+//! reported nodes are moved back out by that much; the tracker's state
+//! stays EM's, so the move never feeds the next frame (moved in the state,
+//! it grew a zigzag of alternate nodes and shifted the anchors of hidden
+//! runs: `docs/algorithm-notes.md`, "Nodes on their bends").
+
+use alloc::vec::Vec;
+
+use crate::math::{self, Vec3};
+
+/// The largest half-angle `theta` of the arc a node explains that is
+/// corrected: past a quarter turn each way the three nodes no longer sample
+/// one bend (a hairpin narrower than a node spacing), and the circle
+/// through them says little of the rope between them.
+pub const MAX_ARC_HALF_ANGLE: f64 = core::f64::consts::FRAC_PI_2;
+
+/// How far the centroid of a circular arc of radius `radius` and length
+/// `length` lies inside the arc's midpoint, towards the centre.
+pub fn arc_centroid_depth(radius: f64, length: f64) -> f64 {
+    let theta = 0.5 * length / radius;
+    if !(theta > 1e-9) {
+        return 0.0;
+    }
+    radius * (1.0 - libm::sin(theta) / theta)
+}
+
+/// The circle through three points: its centre and radius, `None` for
+/// points (nearly) on a line.
+fn circle_through(a: &Vec3, b: &Vec3, c: &Vec3) -> Option<(Vec3, f64)> {
+    let (u, v) = (a - b, c - b);
+    let w = u.cross(&v);
+    let w2 = w.dot(&w);
+    if !(w2 > math::LENGTH_EPSILON * math::LENGTH_EPSILON * u.dot(&u).max(v.dot(&v))) {
+        return None;
+    }
+    // Circumcentre relative to b.
+    let centre = (v * u.dot(&u) - u * v.dot(&v)).cross(&w) / (2.0 * w2);
+    let radius = math::norm(&centre);
+    Some((b + centre, radius))
+}
+
+/// Moves each node that is flagged in `registered` (placed by EM this
+/// frame) with both its neighbours outwards from the circle through the
+/// three, by the depth of the centroid of the arc it explains (half of
+/// each chord to a neighbour). The moves are measured on the nodes as
+/// given, not on nodes already moved. Returns how many nodes moved.
+pub fn onto_arcs(nodes: &mut [Vec3], registered: &[bool]) -> usize {
+    let m = nodes.len();
+    if m < 5 || registered.len() != m || !nodes.iter().all(math::is_finite) {
+        return 0;
+    }
+    let chord = |k: usize| math::norm(&(nodes[k + 1] - nodes[k]));
+    let moves: Vec<(usize, Vec3)> = (1..m - 1)
+        .filter(|&i| registered[i - 1..=i + 1].iter().all(|&r| r))
+        .filter_map(|i| {
+            let (centre, radius) = circle_through(&nodes[i - 1], &nodes[i], &nodes[i + 1])?;
+            let explained = 0.5 * (chord(i - 1) + chord(i));
+            if 0.5 * explained / radius > MAX_ARC_HALF_ANGLE {
+                return None;
+            }
+            let out = (nodes[i] - centre) / radius;
+            // The same bend seen from the nodes two away: alternate nodes
+            // off the rope to either side (a zigzag) read as bends by each
+            // node's neighbours, and this move would grow them.
+            Some((i, nodes[i] + out * arc_centroid_depth(radius, explained)))
+        })
+        .collect();
+    let moved = moves.len();
+    for (i, p) in moves {
+        if math::is_finite(&p) {
+            nodes[i] = p;
+        }
+    }
+    moved
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use alloc::vec;
+
+    /// `count` points `step` radians apart from angle 0 on a circle of
+    /// radius `r - inset` about the origin, in the plane z = 0.6.
+    fn on_circle(r: f64, count: usize, step: f64, inset: f64) -> Vec<Vec3> {
+        (0..count)
+            .map(|k| {
+                let a = step * k as f64;
+                Vec3::new((r - inset) * libm::cos(a), (r - inset) * libm::sin(a), 0.6)
+            })
+            .collect()
+    }
+
+    fn radius_of(p: &Vec3) -> f64 {
+        libm::hypot(p.x, p.y)
+    }
+
+    #[test]
+    fn an_arc_s_centroid_lies_inside_it_by_the_known_depth() {
+        // A half circle of radius 1: centroid at 2 / pi from the centre.
+        let depth = arc_centroid_depth(1.0, core::f64::consts::PI);
+        assert!((depth - (1.0 - 2.0 / core::f64::consts::PI)).abs() < 1e-12);
+        // Small angles: about s^2 / (24 R) (1.021 mm; exactly 1.015 mm).
+        let d = arc_centroid_depth(0.05, 0.035);
+        assert!((d - 0.035 * 0.035 / (24.0 * 0.05)).abs() < 2e-5, "{d}");
+        assert!((d - 0.001_015).abs() < 1e-6, "{d}");
+        assert_eq!(arc_centroid_depth(0.05, 0.0), 0.0);
+    }
+
+    #[test]
+    fn the_centroids_of_arcs_of_a_bend_are_moved_back_onto_it() {
+        // Nodes 35 mm apart on a bend of 5 cm, each at the centroid of the
+        // arc it explains (1 mm inside).
+        let (r, s) = (0.05, 0.035);
+        let depth = arc_centroid_depth(r, s);
+        let mut nodes = on_circle(r, 5, s / r, depth);
+        assert_eq!(onto_arcs(&mut nodes, &[true; 5]), 3);
+        for p in &nodes[1..4] {
+            // Back on the bend within a tenth of the move (the circle
+            // through the inset nodes is a little tighter than the bend).
+            assert!((radius_of(p) - r).abs() < 0.1 * depth, "{}", radius_of(p));
+        }
+        // The ends have one neighbour: not moved.
+        assert!((radius_of(&nodes[0]) - (r - depth)).abs() < 1e-12);
+        assert!((radius_of(&nodes[4]) - (r - depth)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn only_nodes_registered_with_both_neighbours_move() {
+        let before = on_circle(0.05, 5, 0.7, 0.0);
+        let mut nodes = before.clone();
+        // Node 2 with both neighbours; node 1's neighbour 0 is hidden.
+        assert_eq!(onto_arcs(&mut nodes, &[false, true, true, true, false]), 1);
+        assert_eq!(nodes[1], before[1]);
+        assert_eq!(nodes[3], before[3]);
+        assert!(radius_of(&nodes[2]) > 0.05);
+    }
+
+    #[test]
+    fn straight_lines_hairpins_and_bad_input_are_left() {
+        let mut line: Vec<Vec3> = (0..5)
+            .map(|k| Vec3::new(0.01 * k as f64, 0.0, 0.6))
+            .collect();
+        let before = line.clone();
+        assert_eq!(onto_arcs(&mut line, &[true; 5]), 0);
+        assert_eq!(line, before);
+        let mut bend = on_circle(0.05, 5, 0.7, 0.0);
+        assert_eq!(
+            onto_arcs(&mut bend, &[true; 3]),
+            0,
+            "flags of another length"
+        );
+        let mut bad = vec![Vec3::new(f64::NAN, 0.0, 0.6); 4];
+        assert_eq!(onto_arcs(&mut bad, &[true; 4]), 0);
+        let mut doubled = vec![Vec3::new(0.0, 0.0, 0.6); 3];
+        assert_eq!(onto_arcs(&mut doubled, &[true; 3]), 0, "coincident nodes");
+        // Nodes 3 rad apart on a circle: each explains more than a half
+        // turn, a hairpin narrower than a spacing.
+        let mut hairpin = on_circle(0.01, 3, 3.0, 0.0);
+        assert_eq!(onto_arcs(&mut hairpin, &[true; 3]), 0);
+    }
+}
