@@ -1,5 +1,5 @@
 //! The explain mode's account of a frame is the frame's own update: the
-//! same nodes, every EM iteration, the hidden nodes left where EM found
+//! same nodes (the state, and what the frame reports of it), every EM iteration, the hidden nodes left where EM found
 //! them and placed by the sweeps.
 
 use upetrack::{Frame, Params, Tracker};
@@ -29,7 +29,16 @@ fn an_explained_frame_is_the_update_itself_stage_by_stage() {
             continue;
         };
         stepped += 1;
-        assert_eq!(step.resampled, out.nodes, "frame {}", f.index);
+        // The step's last stage is the state; the frame reports it with
+        // its visible nodes on their bends (`report_on_arcs`).
+        let mut reported = step.resampled.clone();
+        upetrack::upe::bends::onto_arcs(&mut reported, &out.visible);
+        assert_eq!(reported, out.nodes, "frame {}", f.index);
+        assert_ne!(
+            step.resampled, out.nodes,
+            "frame {}: nothing on a bend",
+            f.index
+        );
         let em = out.em.expect("UPETrack's EM report");
         assert_eq!(step.em.len(), em.iterations as usize);
         assert_eq!(
