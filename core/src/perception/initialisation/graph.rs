@@ -234,7 +234,7 @@ impl SkeletonGraph {
     }
 }
 
-/// Pairs of different zones with neighbouring skeleton cells.
+/// Pairs of different zones with neighbouring skeleton cells, each once.
 fn touching_zones(grid: &Grid, cells: &[usize], zone_of: &[usize]) -> Vec<(usize, usize)> {
     let mut pairs = Vec::new();
     for &i in cells {
@@ -244,12 +244,13 @@ fn touching_zones(grid: &Grid, cells: &[usize], zone_of: &[usize]) -> Vec<(usize
         }
         for j in grid.ring(i) {
             let b = zone_of[j];
-            if grid.cells[j] && b != usize::MAX && b != a && !pairs.contains(&(a.min(b), a.max(b)))
-            {
+            if grid.cells[j] && b != usize::MAX && b != a {
                 pairs.push((a.min(b), a.max(b)));
             }
         }
     }
+    pairs.sort_unstable();
+    pairs.dedup();
     pairs
 }
 
