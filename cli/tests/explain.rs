@@ -1,6 +1,7 @@
 //! The explain mode's account of a frame is the frame's own update: the
-//! same nodes (the state, and what the frame reports of it), every EM iteration, the hidden nodes left where EM found
-//! them and placed by the sweeps.
+//! same nodes (the state, and what the frame reports of it), every EM
+//! iteration, the hidden nodes left where EM found them and placed by the
+//! sweeps.
 
 use upetrack::{Frame, Params, Tracker};
 use upetrack_synth::{RenderSettings, Scenario, ScenarioKind};

@@ -6,6 +6,7 @@ use std::path::PathBuf;
 
 use upetrack::math::Vec3;
 use upetrack::perception::segmentation::segment;
+use upetrack::upe::bends::circle_through;
 use upetrack::{Algorithm, Frame, Params, Tracker};
 use upetrack_io::eval::{frame_errors, summarise};
 use upetrack_io::run::track_sequence;
@@ -802,14 +803,11 @@ fn inward_offset_on_bends(
             if j < step || j + step >= truth.len() {
                 continue;
             }
-            let (a, b, c) = (truth[j - step], truth[j], truth[j + step]);
-            let (u, v) = (a - b, c - b);
-            let w = u.cross(&v);
-            if w.norm() < 1e-12 {
+            let b = truth[j];
+            let Some((centre, radius)) = circle_through(&truth[j - step], &b, &truth[j + step])
+            else {
                 continue;
-            }
-            let centre = b + (v * u.dot(&u) - u * v.dot(&v)).cross(&w) / (2.0 * w.dot(&w));
-            let radius = (centre - b).norm();
+            };
             if radius > max_radius {
                 continue;
             }

@@ -169,6 +169,41 @@ pub fn nearest_on_segment<const D: usize>(
     }
 }
 
+/// Whether a node lies within a reach of a point, the node found last
+/// tried first: the cloud's points come in runs along the rope, so most
+/// are settled by one distance instead of one per node.
+pub(crate) struct NearNodes<'a> {
+    nodes: &'a [Vec3],
+    reach_squared: f64,
+    last: usize,
+}
+
+impl<'a> NearNodes<'a> {
+    pub(crate) fn new(nodes: &'a [Vec3], reach: f64) -> Self {
+        Self {
+            nodes,
+            reach_squared: reach * reach,
+            last: 0,
+        }
+    }
+
+    /// `true` when a node `k` that `counts(k)` lies within the reach of `p`.
+    pub(crate) fn any(&mut self, p: &Vec3, counts: impl Fn(usize) -> bool) -> bool {
+        let within =
+            |k: usize| counts(k) && (p - self.nodes[k]).norm_squared() <= self.reach_squared;
+        if self.last < self.nodes.len() && within(self.last) {
+            return true;
+        }
+        match (0..self.nodes.len()).find(|&k| within(k)) {
+            Some(k) => {
+                self.last = k;
+                true
+            }
+            None => false,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,7 +1,7 @@
 //! When a tracked state contradicts the images, and how often it is then
 //! replaced by a rope found again: recoveries in a row back off.
 
-use crate::math::Vec3;
+use crate::math::{self, NearNodes, Vec3};
 use crate::polyline::polyline_length;
 
 use super::stepper::StepReports;
@@ -31,13 +31,11 @@ pub fn contradicts_evidence(
     let in_free_space = report
         .free_space
         .is_some_and(|f| f.left >= MIN_NODES_IN_FREE_SPACE && 2 * f.left > f.found);
+    let mut near = NearNodes::new(nodes, reach);
+    // A point that is not finite is no evidence of rope.
     let far = cloud
         .iter()
-        .filter(|x| {
-            nodes
-                .iter()
-                .all(|y| (*x - y).norm_squared() > reach * reach)
-        })
+        .filter(|x| math::is_finite(x) && !near.any(x, |_| true))
         .count();
     let unexplained = !cloud.is_empty() && far as f64 > UNEXPLAINED_LIMIT * cloud.len() as f64;
     stretched || in_free_space || unexplained

@@ -26,7 +26,7 @@ pub fn arc_centroid_depth(radius: f64, length: f64) -> f64 {
 
 /// The circle through three points: its centre and radius, `None` for
 /// points (nearly) on a line.
-fn circle_through(a: &Vec3, b: &Vec3, c: &Vec3) -> Option<(Vec3, f64)> {
+pub fn circle_through(a: &Vec3, b: &Vec3, c: &Vec3) -> Option<(Vec3, f64)> {
     let (u, v) = (a - b, c - b);
     let w = u.cross(&v);
     let w2 = w.dot(&w);

@@ -8,7 +8,7 @@ use alloc::vec::Vec;
 
 use super::length::{along, end_run_from_anchor, set_end_run, taut_from_pulled_end};
 use crate::curve::RopeCurve;
-use crate::math::{self, Vec3};
+use crate::math::{self, NearNodes, Vec3};
 use crate::perception::evidence::OCCLUDER_MARGIN;
 use crate::perception::table::Plane;
 use crate::polyline::polyline_length;
@@ -54,41 +54,6 @@ pub fn unexplained_points(nodes: &[Vec3], cloud: &[Vec3], reach: f64) -> Vec<Vec
         .copied()
         .collect();
     thinned(far)
-}
-
-/// Whether a node lies within a reach of a point, the node found last
-/// tried first: the cloud's points come in runs along the rope, so most
-/// are settled by one distance instead of one per node.
-struct NearNodes<'a> {
-    nodes: &'a [Vec3],
-    reach_squared: f64,
-    last: usize,
-}
-
-impl<'a> NearNodes<'a> {
-    fn new(nodes: &'a [Vec3], reach: f64) -> Self {
-        Self {
-            nodes,
-            reach_squared: reach * reach,
-            last: 0,
-        }
-    }
-
-    /// `true` when a node `k` that `counts(k)` lies within the reach of `p`.
-    fn any(&mut self, p: &Vec3, counts: impl Fn(usize) -> bool) -> bool {
-        let within =
-            |k: usize| counts(k) && (p - self.nodes[k]).norm_squared() <= self.reach_squared;
-        if self.last < self.nodes.len() && within(self.last) {
-            return true;
-        }
-        match (0..self.nodes.len()).find(|&k| within(k)) {
-            Some(k) => {
-                self.last = k;
-                true
-            }
-            None => false,
-        }
-    }
 }
 
 /// Most points kept of things seen beside the rope

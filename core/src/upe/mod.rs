@@ -380,6 +380,8 @@ fn run_step(
         _ => FreeSpaceReport::default(),
     };
     let m = input.previous.len();
+    // `l0 = L0 / (M - 1)`.
+    let rest_spacing = input.rest_length.map(|l| l / m.saturating_sub(1) as f64);
     let slide::HiddenEnds { head, tail } = slide::HiddenEnds::of(input.visible);
     let keep_ends = settings.keep_end_run_spacing;
     let extension = match (
@@ -402,13 +404,8 @@ fn run_step(
         }
         _ => ExtensionReport::default(),
     };
-    let emerged = match (
-        input.rest_length,
-        &input.evidence,
-        settings.follow_emerged_ends,
-    ) {
-        (Some(l), Some(e), true) => {
-            let spacing = l / m.saturating_sub(1) as f64;
+    let emerged = match (rest_spacing, &input.evidence, settings.follow_emerged_ends) {
+        (Some(spacing), Some(e), true) => {
             let reach = emerging::explained_reach(spacing, e.radius);
             let hidden_near = |p: &Vec3, r: f64| e.hidden_around(p, r);
             // Fitted only when a piece is judged; no plane found: no
@@ -431,12 +428,11 @@ fn run_step(
         _ => EmergedReport::default(),
     };
     let smooth = settings.smooth_resampling;
-    let kept = match (input.rest_length, keep_ends) {
+    let kept = match (rest_spacing, keep_ends) {
         // No extension was added at a hidden end, so the hidden runs are
         // still the first `head` and last `tail` points. (Fewer than two
         // nodes: no middle to spread, `None`.)
-        (Some(l), true) => {
-            let spacing = l / m.saturating_sub(1) as f64;
+        (Some(spacing), true) => {
             // Past its estimated curve a hidden end goes on only where a
             // hidden rope may be: not into free space.
             let allows = |p: &Vec3| match (&input.evidence, settings.free_space) {
