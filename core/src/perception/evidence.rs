@@ -163,6 +163,14 @@ impl Evidence<'_> {
         })
     }
 
+    /// The depth measured at the pixel `p` projects to, metres; `None` out
+    /// of view or without a measurement.
+    pub fn depth_at_point(&self, p: &Vec3) -> Option<f64> {
+        let (u, v) = self.pixel_of(p)?;
+        let raw = self.frame.depth[(v * self.frame.width as i64 + u) as usize];
+        (raw != 0).then(|| raw as f64 * self.frame.depth_scale)
+    }
+
     /// `true` when another tracked rope covers pixel `(u, v)`.
     fn other_rope_at(&self, u: i64, v: i64) -> bool {
         self.others.is_some_and(|m| m.get(u, v))

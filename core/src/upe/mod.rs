@@ -375,8 +375,30 @@ fn run_step(
         }
         _ => LengthReport::default(),
     };
+    // The table, fitted once when a stage needs it; no plane found: no
+    // evidence against.
+    let table: core::cell::OnceCell<Option<Plane>> = core::cell::OnceCell::new();
     let free_space = match (&input.evidence, settings.free_space) {
-        (Some(e), true) => clear_free_space(&mut nodes, input.visible, e),
+        (Some(e), true) => {
+            let seen: Vec<Vec3> = nodes
+                .iter()
+                .zip(input.visible)
+                .filter(|(_, &v)| v)
+                .map(|(p, _)| *p)
+                .collect();
+            // Only a table the visible rope rests on says where it cannot be.
+            let resting = core::cell::OnceCell::new();
+            let inside_table = |p: &Vec3| {
+                resting
+                    .get_or_init(|| {
+                        table
+                            .get_or_init(|| fit_table(e))
+                            .filter(|t| t.carries(&seen, e.radius))
+                    })
+                    .is_some_and(|t| t.hides_inside(e, p))
+            };
+            clear_free_space(&mut nodes, input.visible, e, &inside_table)
+        }
         _ => FreeSpaceReport::default(),
     };
     let m = input.previous.len();
@@ -408,9 +430,6 @@ fn run_step(
         (Some(spacing), Some(e), true) => {
             let reach = emerging::explained_reach(spacing, e.radius);
             let hidden_near = |p: &Vec3, r: f64| e.hidden_around(p, r);
-            // Fitted only when a piece is judged; no plane found: no
-            // evidence against.
-            let table: core::cell::OnceCell<Option<Plane>> = core::cell::OnceCell::new();
             let on_surface = |line: &[Vec3]| {
                 table
                     .get_or_init(|| fit_table(e))
