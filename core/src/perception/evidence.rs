@@ -168,7 +168,7 @@ impl Evidence<'_> {
     pub fn depth_at_point(&self, p: &Vec3) -> Option<f64> {
         let (u, v) = self.pixel_of(p)?;
         let raw = self.frame.depth[(v * self.frame.width as i64 + u) as usize];
-        (raw != 0).then(|| raw as f64 * self.frame.depth_scale)
+        (raw != 0).then_some(raw as f64 * self.frame.depth_scale)
     }
 
     /// `true` when another tracked rope covers pixel `(u, v)`.
