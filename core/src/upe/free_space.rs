@@ -1,6 +1,9 @@
 //! Hidden nodes out of free space (this project's addition after Eq. 11):
-//! a hidden run whose estimate puts nodes where the images show nothing
-//! hiding them (`Sight::FreeSpace`) is moved back to where something can.
+//! a hidden run whose estimate puts nodes where no hidden rope may be is
+//! moved back to where one may. Where it may is the caller's test
+//! (`may_hide`): in the step, not where the images show nothing hiding the
+//! node (`Sight::FreeSpace`) and not inside the table the visible rope
+//! rests on (`Plane::hides_inside`).
 //!
 //! - A run at an end of the rope turns about its anchor (the last visible
 //!   node), about the camera's optical axis, by the smallest angle that
@@ -17,17 +20,15 @@
 //! Where nothing clears every node, the choice with the fewest nodes in
 //! free space is kept (ties: the smallest change).
 //!
-//! A node inside the table the visible rope rests on counts as in free
-//! space too, whatever covers it (`inside_table`): on a tilted table a run
-//! turned about the optical axis keeps its depths and sinks into the table
-//! on one side, where the window test took the table in front of it for an
-//! occluder (and a declared rectangle says nothing about depth).
+//! Turned about the optical axis a run keeps its depths, so on a tilted
+//! table it sinks into the table on one side, where the window test alone
+//! takes the table in front of it for an occluder (and a declared
+//! rectangle says nothing about depth): hence the table in `may_hide`.
 
 use alloc::vec::Vec;
 
 use super::slide::{hidden_runs, HiddenRun};
 use crate::math::{self, Vec3};
-use crate::perception::evidence::Evidence;
 
 /// Turning angles tried for an end run, radians: 5 degree steps ...
 const TURN_STEP: f64 = 5.0 * core::f64::consts::PI / 180.0;
@@ -47,15 +48,8 @@ pub struct FreeSpaceReport {
     pub runs_moved: usize,
 }
 
-fn in_free_space(
-    evidence: &Evidence<'_>,
-    inside_table: &dyn Fn(&Vec3) -> bool,
-    points: &[Vec3],
-) -> usize {
-    points
-        .iter()
-        .filter(|p| !evidence.sight(p).allows_hidden() || inside_table(p))
-        .count()
+fn in_free_space(may_hide: &dyn Fn(&Vec3) -> bool, points: &[Vec3]) -> usize {
+    points.iter().filter(|p| !may_hide(p)).count()
 }
 
 /// `p` turned by `angle` about the axis `axis` (unit) through `centre`
@@ -110,28 +104,26 @@ fn candidates(nodes: &[Vec3], run: HiddenRun) -> Vec<Vec<Vec3>> {
     out
 }
 
-/// Moves hidden runs (`known[m] == false`) out of free space, in place.
-/// `inside_table` says whether a point lies inside the table the rope rests
-/// on (`Plane::hides_inside`; `|_| false` where no table is known).
+/// Moves hidden runs (`known[m] == false`) out of free space, in place:
+/// `may_hide(p)` is `false` where no hidden rope may be.
 pub fn clear_free_space(
     nodes: &mut [Vec3],
     known: &[bool],
-    evidence: &Evidence<'_>,
-    inside_table: &dyn Fn(&Vec3) -> bool,
+    may_hide: &dyn Fn(&Vec3) -> bool,
 ) -> FreeSpaceReport {
     let mut report = FreeSpaceReport::default();
     if known.len() != nodes.len() {
         return report;
     }
     for run in hidden_runs(known) {
-        let found = in_free_space(evidence, inside_table, &nodes[run.start..run.end]);
+        let found = in_free_space(may_hide, &nodes[run.start..run.end]);
         report.found += found;
         if found == 0 {
             continue;
         }
         let mut best: Option<(usize, Vec<Vec3>)> = None;
         for candidate in candidates(nodes, run) {
-            let count = in_free_space(evidence, inside_table, &candidate);
+            let count = in_free_space(may_hide, &candidate);
             if best.as_ref().is_none_or(|(c, _)| count < *c) {
                 let done = count == 0;
                 best = Some((count, candidate));
@@ -218,12 +210,14 @@ mod tests {
         // the image it sinks into the table, which then lies in front of it
         // as an occluder would.
         let mut blind = before.clone();
-        let r = clear_free_space(&mut blind, &known, &e, &|_| false);
+        let r = clear_free_space(&mut blind, &known, &|p| e.sight(p).allows_hidden());
         assert_eq!((r.runs_moved, r.left), (1, 0));
         assert!(deepest(&blind) > OCCLUDER_MARGIN, "{}", deepest(&blind));
         // Knowing the table, the stage does not take a place inside it.
         let mut seeing = before.clone();
-        clear_free_space(&mut seeing, &known, &e, &|p| plane.hides_inside(&e, p));
+        clear_free_space(&mut seeing, &known, &|p| {
+            e.sight(p).allows_hidden() && !plane.hides_inside(&e, p)
+        });
         assert!(deepest(&seeing) < OCCLUDER_MARGIN, "{}", deepest(&seeing));
         assert_eq!(&seeing[..3], &before[..3]);
     }
@@ -238,7 +232,7 @@ mod tests {
         let before = tip_over_free_table();
         let mut nodes = before.clone();
         let known = [true, true, true, false, false, false];
-        let r = clear_free_space(&mut nodes, &known, &e, &|_| false);
+        let r = clear_free_space(&mut nodes, &known, &|p| e.sight(p).allows_hidden());
         (before, nodes, r)
     }
 
@@ -251,7 +245,7 @@ mod tests {
         let known = [true, true, true, false, false, false];
         let before = nodes.clone();
         let len = |p: &[Vec3]| p.windows(2).map(|w| (w[1] - w[0]).norm()).sum::<f64>();
-        let r = clear_free_space(&mut nodes, &known, &e, &|_| false);
+        let r = clear_free_space(&mut nodes, &known, &|p| e.sight(p).allows_hidden());
         assert_eq!((r.found, r.left, r.runs_moved), (3, 0, 1), "{r:?}");
         for p in &nodes[3..] {
             assert!(e.sight(p).allows_hidden(), "{p:?}");
@@ -344,7 +338,9 @@ mod tests {
             at(26.0, 24.0),
         ];
         let before = nodes.clone();
-        let r = clear_free_space(&mut nodes, &[true, true, false, false], &e, &|_| false);
+        let r = clear_free_space(&mut nodes, &[true, true, false, false], &|p| {
+            e.sight(p).allows_hidden()
+        });
         assert_eq!((r.found, r.left, r.runs_moved), (2, 2, 0));
         assert_eq!(nodes, before);
     }
@@ -391,12 +387,12 @@ mod tests {
             at(32.0, 34.0),
         ];
         let known = [true, true, false, false, true, true];
-        let r = clear_free_space(&mut nodes, &known, &e, &|_| false);
+        let r = clear_free_space(&mut nodes, &known, &|p| e.sight(p).allows_hidden());
         assert_eq!((r.found, r.left, r.runs_moved), (2, 0, 1), "{r:?}");
         assert!(nodes[2..4].iter().all(|p| e.sight(p).allows_hidden()));
         // Nothing in free space: nothing moves.
         let mut again = nodes.clone();
-        let r = clear_free_space(&mut again, &known, &e, &|_| false);
+        let r = clear_free_space(&mut again, &known, &|p| e.sight(p).allows_hidden());
         assert_eq!((r.found, r.runs_moved), (0, 0));
         assert_eq!(again, nodes);
     }

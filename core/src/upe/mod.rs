@@ -17,6 +17,7 @@ pub mod resampling;
 pub mod shared_motion;
 pub mod slide;
 
+use crate::perception::evidence::Evidence;
 use crate::perception::table::{fit_table, Plane};
 use emerging::{follow_emerged_ends, lies_on, EmergedReport, InView};
 use free_space::{clear_free_space, FreeSpaceReport};
@@ -378,27 +379,29 @@ fn run_step(
     // The table, fitted once when a stage needs it; no plane found: no
     // evidence against.
     let table: core::cell::OnceCell<Option<Plane>> = core::cell::OnceCell::new();
+    let seen: Vec<Vec3> = nodes
+        .iter()
+        .zip(input.visible)
+        .filter(|(_, &v)| v)
+        .map(|(p, _)| *p)
+        .collect();
+    // The table, only if the visible rope rests on it: the surface no
+    // hidden node can be inside.
+    let resting: core::cell::OnceCell<Option<Plane>> = core::cell::OnceCell::new();
+    // Where a hidden rope may be: somewhere the images allow one, not
+    // inside the table the rope rests on.
+    let may_hide = |e: &Evidence<'_>, p: &Vec3| {
+        e.sight(p).allows_hidden()
+            && !resting
+                .get_or_init(|| {
+                    table
+                        .get_or_init(|| fit_table(e))
+                        .filter(|t| t.carries(&seen, e.radius))
+                })
+                .is_some_and(|t| t.hides_inside(e, p))
+    };
     let free_space = match (&input.evidence, settings.free_space) {
-        (Some(e), true) => {
-            let seen: Vec<Vec3> = nodes
-                .iter()
-                .zip(input.visible)
-                .filter(|(_, &v)| v)
-                .map(|(p, _)| *p)
-                .collect();
-            // Only a table the visible rope rests on says where it cannot be.
-            let resting = core::cell::OnceCell::new();
-            let inside_table = |p: &Vec3| {
-                resting
-                    .get_or_init(|| {
-                        table
-                            .get_or_init(|| fit_table(e))
-                            .filter(|t| t.carries(&seen, e.radius))
-                    })
-                    .is_some_and(|t| t.hides_inside(e, p))
-            };
-            clear_free_space(&mut nodes, input.visible, e, &inside_table)
-        }
+        (Some(e), true) => clear_free_space(&mut nodes, input.visible, &|p| may_hide(e, p)),
         _ => FreeSpaceReport::default(),
     };
     let m = input.previous.len();
@@ -455,7 +458,7 @@ fn run_step(
             // Past its estimated curve a hidden end goes on only where a
             // hidden rope may be: not into free space.
             let allows = |p: &Vec3| match (&input.evidence, settings.free_space) {
-                (Some(e), true) => e.sight(p).allows_hidden(),
+                (Some(e), true) => may_hide(e, p),
                 _ => true,
             };
             resample_with_end_runs_at_rest(&nodes, head, tail, m, spacing, smooth, &allows)
