@@ -458,7 +458,7 @@ fn run_step(
             // Past its estimated curve a hidden end goes on only where a
             // hidden rope may be: not into free space.
             let allows = |p: &Vec3| match (&input.evidence, settings.free_space) {
-                (Some(e), true) => may_hide(e, p),
+                (Some(e), true) => e.sight(p).allows_hidden(),
                 _ => true,
             };
             resample_with_end_runs_at_rest(&nodes, head, tail, m, spacing, smooth, &allows)
