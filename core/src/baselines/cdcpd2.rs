@@ -504,11 +504,8 @@ impl Cdcpd2State {
                     .zip(&bounds)
                     .filter(|(w, &bd)| math::norm(&(w[1] - w[0])) >= bd * 0.999)
                     .count();
-                report.on_table = table.map_or(0, |t| {
-                    out.iter()
-                        .filter(|p| t.normal.dot(p) - t.offset < 1e-4)
-                        .count()
-                });
+                report.on_table =
+                    table.map_or(0, |t| out.iter().filter(|p| t.height(p) < 1e-4).count());
                 nodes.copy_from_slice(&out);
             }
             None => nodes.copy_from_slice(&cpd),

@@ -106,8 +106,8 @@ impl Evidence<'_> {
         if self.occlusions.iter().any(|r| r.contains(u, v)) || self.other_rope_at(u, v) {
             return true;
         }
-        let raw = self.frame.depth[(v * self.frame.width as i64 + u) as usize];
-        raw != 0 && (raw as f64) * self.frame.depth_scale < p.z - OCCLUDER_MARGIN
+        self.depth_at_pixel(u, v)
+            .is_some_and(|z| z < p.z - OCCLUDER_MARGIN)
     }
 
     /// `true` when something hides the rope within `reach` metres of `p`
@@ -167,6 +167,11 @@ impl Evidence<'_> {
     /// of view or without a measurement.
     pub fn depth_at_point(&self, p: &Vec3) -> Option<f64> {
         let (u, v) = self.pixel_of(p)?;
+        self.depth_at_pixel(u, v)
+    }
+
+    /// The depth measured at pixel `(u, v)` (inside the image), metres.
+    fn depth_at_pixel(&self, u: i64, v: i64) -> Option<f64> {
         let raw = self.frame.depth[(v * self.frame.width as i64 + u) as usize];
         (raw != 0).then_some(raw as f64 * self.frame.depth_scale)
     }

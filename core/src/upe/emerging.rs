@@ -153,7 +153,7 @@ fn thinned<T>(items: Vec<T>) -> Vec<T> {
 pub fn lies_on(table: &Plane, line: &[Vec3], radius: f64) -> bool {
     let mut heights: Vec<f64> = line
         .iter()
-        .map(|p| table.normal.dot(p) - table.offset)
+        .map(|p| table.height(p))
         .filter(|h| h.is_finite())
         .collect();
     if heights.is_empty() {

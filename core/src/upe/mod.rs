@@ -17,7 +17,6 @@ pub mod resampling;
 pub mod shared_motion;
 pub mod slide;
 
-use crate::perception::evidence::Evidence;
 use crate::perception::table::{fit_table, Plane};
 use emerging::{follow_emerged_ends, lies_on, EmergedReport, InView};
 use free_space::{clear_free_space, FreeSpaceReport};
@@ -379,29 +378,31 @@ fn run_step(
     // The table, fitted once when a stage needs it; no plane found: no
     // evidence against.
     let table: core::cell::OnceCell<Option<Plane>> = core::cell::OnceCell::new();
-    let seen: Vec<Vec3> = nodes
-        .iter()
-        .zip(input.visible)
-        .filter(|(_, &v)| v)
-        .map(|(p, _)| *p)
-        .collect();
-    // The table, only if the visible rope rests on it: the surface no
-    // hidden node can be inside.
-    let resting: core::cell::OnceCell<Option<Plane>> = core::cell::OnceCell::new();
-    // Where a hidden rope may be: somewhere the images allow one, not
-    // inside the table the rope rests on.
-    let may_hide = |e: &Evidence<'_>, p: &Vec3| {
-        e.sight(p).allows_hidden()
-            && !resting
-                .get_or_init(|| {
-                    table
-                        .get_or_init(|| fit_table(e))
-                        .filter(|t| t.carries(&seen, e.radius))
-                })
-                .is_some_and(|t| t.hides_inside(e, p))
-    };
     let free_space = match (&input.evidence, settings.free_space) {
-        (Some(e), true) => clear_free_space(&mut nodes, input.visible, &|p| may_hide(e, p)),
+        (Some(e), true) if input.visible.contains(&false) => {
+            let seen: Vec<Vec3> = nodes
+                .iter()
+                .zip(input.visible)
+                .filter(|(_, &v)| v)
+                .map(|(p, _)| *p)
+                .collect();
+            // The table only if the visible rope rests on it: the surface
+            // no hidden node can be inside.
+            let resting = core::cell::OnceCell::new();
+            // Where a hidden rope may be: somewhere the images allow one,
+            // not inside the table the rope rests on.
+            let may_hide = |p: &Vec3| {
+                e.sight(p).allows_hidden()
+                    && !resting
+                        .get_or_init(|| {
+                            table
+                                .get_or_init(|| fit_table(e))
+                                .filter(|t| t.carries(&seen, e.radius))
+                        })
+                        .is_some_and(|t| t.hides_inside(e, p))
+            };
+            clear_free_space(&mut nodes, input.visible, &may_hide)
+        }
         _ => FreeSpaceReport::default(),
     };
     let m = input.previous.len();
