@@ -155,6 +155,7 @@ impl Params {
                 keep_end_run_spacing: false,
                 follow_shared_motion: false,
                 follow_emerged_ends: false,
+                hidden_under_crossings: false,
                 report_on_arcs: false,
                 ..upe
             },

@@ -1,11 +1,13 @@
 //! Node visibility (the paper's Fig. 3): a node is visible when at least
 //! `V_lim` points of the current cloud lie within `r_vis` of its previous
 //! position. Every algorithm shares it: the tracker's loss test, and the
-//! hidden nodes UPETrack's step estimates.
+//! hidden nodes UPETrack's step estimates. UPETrack also hides a node
+//! lying under another stretch of the rope where it crosses itself.
 
 use alloc::vec::Vec;
 
-use crate::math::Vec3;
+use crate::math::{Vec2, Vec3};
+use crate::perception::camera::CameraIntrinsics;
 
 /// Number of points strictly within `radius` of `node` (`q` in the paper).
 pub fn neighbour_count(node: &Vec3, cloud: &[Vec3], radius: f64) -> usize {
@@ -91,6 +93,95 @@ pub fn classify_nodes(
     }
 }
 
+/// Nodes that lie under another stretch of the rope where it crosses
+/// itself. A node's disc in the image (the rope's radius at its depth)
+/// overlaps a stretch at least [`MIN_STRAND_GAP_NODES`] nodes away, the two
+/// cross at an angle, and the rope measured along the node's own stretch a
+/// little beyond the crossing (`rope_depth`, the depth of the rope's pixels
+/// around an image point) lies more than a radius deeper than along the
+/// other stretch: there the images show the other stretch only. The
+/// tracked depths are not read: near a crossing EM has mixed them.
+pub fn under_other_strand(
+    nodes: &[Vec3],
+    camera: &CameraIntrinsics,
+    radius: f64,
+    rope_depth: &dyn Fn(Vec2) -> Option<f64>,
+) -> Vec<bool> {
+    let m = nodes.len();
+    let mut under = alloc::vec![false; m];
+    if !(radius > 0.0) || m < MIN_STRAND_GAP_NODES + 2 {
+        return under;
+    }
+    let focal = 0.5 * (camera.fx + camera.fy);
+    let projected: Vec<Option<Vec2>> = nodes.iter().map(|p| camera.project(p)).collect();
+    let unit = |v: Vec2| (v.norm() > 0.0).then(|| v / v.norm());
+    let direction = |i: usize| {
+        let (a, b) = (
+            projected[i.saturating_sub(1)]?,
+            projected[(i + 1).min(m - 1)]?,
+        );
+        unit(b - a)
+    };
+    let mean_depth = |at: Vec2, d: Vec2, reach: f64| {
+        let found: Vec<f64> = [at + d * reach, at - d * reach]
+            .into_iter()
+            .filter_map(rope_depth)
+            .collect();
+        (!found.is_empty()).then(|| found.iter().sum::<f64>() / found.len() as f64)
+    };
+    for i in 0..m {
+        let (Some(a), Some(da)) = (projected[i], direction(i)) else {
+            continue;
+        };
+        let r_i = radius * focal / nodes[i].z;
+        under[i] = (0..m - 1)
+            .filter(|&j| j + 1 + MIN_STRAND_GAP_NODES <= i || j >= i + MIN_STRAND_GAP_NODES)
+            .any(|j| {
+                let (Some(b0), Some(b1)) = (projected[j], projected[j + 1]) else {
+                    return false;
+                };
+                let Some(db) = unit(b1 - b0) else {
+                    return false;
+                };
+                let t = (a - b0).dot(&db).clamp(0.0, (b1 - b0).norm());
+                let c = b0 + db * t;
+                let z_c = nodes[j].z + (nodes[j + 1].z - nodes[j].z) * t / (b1 - b0).norm();
+                if !(z_c > 0.0) {
+                    return false;
+                }
+                let r_c = radius * focal / z_c;
+                let sin = da.x * db.y - da.y * db.x;
+                if (a - c).norm() >= r_i + r_c || libm::fabs(sin) < MIN_CROSSING_SINE {
+                    return false;
+                }
+                // Where the two stretches' lines meet.
+                let s = ((c - a).x * db.y - (c - a).y * db.x) / sin;
+                let x = a + da * s;
+                let reach = CROSSING_PROBE_RADII * r_i.max(r_c);
+                match (mean_depth(x, da, reach), mean_depth(x, db, reach)) {
+                    (Some(own), Some(other)) => own > other + radius,
+                    _ => false,
+                }
+            });
+    }
+    under
+}
+
+/// Fewest nodes between a node and a stretch of the rope that may lie
+/// over it ([`under_other_strand`]): its neighbours' segments touch it.
+pub const MIN_STRAND_GAP_NODES: usize = 2;
+
+/// Two stretches meeting at a smaller angle (sine) run side by side.
+pub const MIN_CROSSING_SINE: f64 = 0.5;
+
+/// How far from a crossing each stretch is measured, in the rope's
+/// radius in the image: beyond the other stretch's half width.
+pub const CROSSING_PROBE_RADII: f64 = 2.5;
+
+/// Half side, pixels, of the window whose rope pixels give the depth at a
+/// probe beside a crossing (their median).
+pub const CROSSING_DEPTH_WINDOW_PX: i64 = 1;
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -171,5 +262,115 @@ mod tests {
             vec![true, true, true, false, false]
         );
         assert_eq!(visible_nodes_relative(&nodes, &[], r, v, f), vec![false; 5]);
+    }
+
+    /// A rope crossing itself seen from 1 m: stretch A along x at depth
+    /// `z_a`, a detour far from the crossing, stretch B along y at `z_b`;
+    /// nodes 5 cm apart, A's and B's middle nodes both at the crossing.
+    fn crossing(z_a: f64, z_b: f64) -> Vec<Vec3> {
+        let mut nodes: Vec<Vec3> = (-2..=2)
+            .map(|k| Vec3::new(0.05 * k as f64, 0.0, z_a))
+            .collect();
+        nodes.extend([
+            Vec3::new(0.15, 0.05, 1.0),
+            Vec3::new(0.15, 0.15, 1.0),
+            Vec3::new(0.05, 0.15, 1.0),
+        ]);
+        nodes.extend((-2..=2).rev().map(|k| Vec3::new(0.0, 0.05 * k as f64, z_b)));
+        nodes
+    }
+
+    fn camera() -> CameraIntrinsics {
+        CameraIntrinsics {
+            width: 640,
+            height: 480,
+            fx: 600.0,
+            fy: 600.0,
+            cx: 320.0,
+            cy: 240.0,
+        }
+    }
+
+    /// The depth of the rope's surface seen at an image point: A's where
+    /// A covers it (within a radius of y = 0), else B's (within a radius
+    /// of x = 0), else nothing.
+    fn surface(z_a: f64, z_b: f64, radius: f64) -> impl Fn(Vec2) -> Option<f64> {
+        let cam = camera();
+        move |at: Vec2| {
+            let z_a_surface = z_a - radius;
+            let on_a = ((at.y - cam.cy) * z_a_surface / cam.fy).abs() < radius;
+            let on_b = ((at.x - cam.cx) * (z_b - radius) / cam.fx).abs() < radius;
+            if on_a {
+                Some(z_a_surface)
+            } else if on_b {
+                Some(z_b - radius)
+            } else {
+                None
+            }
+        }
+    }
+
+    #[test]
+    fn the_node_under_the_stretch_on_top_is_hidden_and_the_one_on_top_is_not() {
+        let radius = 0.0075;
+        // A on top (1.5 cm nearer): B's node at the crossing is under it.
+        let nodes = crossing(0.985, 1.0);
+        let under = under_other_strand(&nodes, &camera(), radius, &surface(0.985, 1.0, radius));
+        let flagged: Vec<usize> = (0..nodes.len()).filter(|&i| under[i]).collect();
+        assert_eq!(flagged, vec![10]);
+        // B on top: A's middle node is.
+        let nodes = crossing(1.0, 0.985);
+        let under = under_other_strand(&nodes, &camera(), radius, &surface(1.0, 0.985, radius));
+        let flagged: Vec<usize> = (0..nodes.len()).filter(|&i| under[i]).collect();
+        assert_eq!(flagged, vec![2]);
+    }
+
+    #[test]
+    fn the_images_not_the_tracked_depths_say_which_stretch_is_on_top() {
+        let radius = 0.0075;
+        // The tracked nodes say B is on top, the images say A is: B's node
+        // is hidden (near a crossing EM mixes the tracked depths).
+        let nodes = crossing(1.0, 0.99);
+        let under = under_other_strand(&nodes, &camera(), radius, &surface(0.985, 1.0, radius));
+        assert!(under[10] && !under[2]);
+        // Stretches less than a radius apart in depth: neither.
+        let under = under_other_strand(&nodes, &camera(), radius, &surface(0.996, 1.0, radius));
+        assert!(!under.contains(&true));
+    }
+
+    #[test]
+    fn stretches_side_by_side_or_without_depth_hide_nothing() {
+        let radius = 0.0075;
+        // B turned to run beside A (20 degrees apart): no crossing.
+        let mut nodes = crossing(0.985, 1.0);
+        for (k, p) in nodes[8..].iter_mut().enumerate() {
+            let t = 0.05 * (2.0 - k as f64);
+            *p = Vec3::new(t * 0.94, t * 0.34, 1.0);
+        }
+        // Measured deeper along B's direction from where the two lines
+        // meet, nearer along A's: at 20 degrees that is no crossing.
+        let (cx, cy) = (camera().cx, camera().cy);
+        let by_direction = |at: Vec2| {
+            let angle = libm::atan2(at.y - cy, at.x - cx).abs();
+            let along_b =
+                (angle - 0.35).abs() < 0.1 || (angle - (core::f64::consts::PI - 0.35)).abs() < 0.1;
+            Some(if along_b {
+                1.0 - radius
+            } else {
+                0.985 - radius
+            })
+        };
+        assert!(!under_other_strand(&nodes, &camera(), radius, &by_direction).contains(&true));
+        let depth = surface(0.985, 1.0, radius);
+        // No rope pixels with depth around the crossing.
+        let nodes = crossing(0.985, 1.0);
+        assert!(!under_other_strand(&nodes, &camera(), radius, &|_| None).contains(&true));
+        // Bad input: nothing, and no panic.
+        let mut bad = nodes.clone();
+        bad[10] = Vec3::new(f64::NAN, 0.0, 1.0);
+        bad[2].z = -1.0;
+        let _ = under_other_strand(&bad, &camera(), radius, &depth);
+        assert!(!under_other_strand(&nodes, &camera(), f64::NAN, &depth).contains(&true));
+        assert!(under_other_strand(&[], &camera(), radius, &depth).is_empty());
     }
 }

@@ -344,6 +344,13 @@ pub const PARAMETERS: &[ParamInfo] = &[
         ParamKind::Bool,
     ),
     p(
+        "hidden_under_crossings",
+        Upetrack,
+        "crossings hide",
+        "A node under another stretch of the rope where it crosses itself is hidden, the stretch on top read from the depth beside the crossing (off: the paper's visibility)",
+        ParamKind::Bool,
+    ),
+    p(
         "report_on_arcs",
         Upetrack,
         "nodes on their bends",

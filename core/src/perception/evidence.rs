@@ -5,10 +5,12 @@
 //! measurement, or on rope-coloured pixels; a node whose pixels show a
 //! surface at or behind it with no rope colour is in free space.
 
+use alloc::vec::Vec;
+
 use super::camera::{depth_noise, CameraIntrinsics};
 use super::frame::Frame;
 use super::segmentation::{Mask, Rect};
-use crate::math::Vec3;
+use crate::math::{Vec2, Vec3};
 
 /// A surface this much nearer the camera than a point hides it, metres:
 /// well above the depth noise at a metre (about 3 mm) and below the gap
@@ -161,6 +163,27 @@ impl Evidence<'_> {
                 }
             })
         })
+    }
+
+    /// The median depth of this rope's pixels (in the mask, not another
+    /// rope's) within `half` pixels of the image point `at`, metres; `None`
+    /// where none has a measurement or `at` is outside the image.
+    pub fn rope_depth_near(&self, at: Vec2, half: i64) -> Option<f64> {
+        let (w, h) = (self.frame.width as f64, self.frame.height as f64);
+        if !(at.x >= 0.0 && at.y >= 0.0 && at.x < w && at.y < h) {
+            return None;
+        }
+        let (u, v) = (libm::round(at.x) as i64, libm::round(at.y) as i64);
+        let mut found: Vec<f64> = Vec::new();
+        for y in v - half..=v + half {
+            for x in u - half..=u + half {
+                if self.mask.get(x, y) && !self.other_rope_at(x, y) {
+                    found.extend(self.depth_at_pixel(x, y));
+                }
+            }
+        }
+        found.sort_unstable_by(f64::total_cmp);
+        found.get(found.len() / 2).copied()
     }
 
     /// The depth measured at the pixel `p` projects to, metres; `None` out
@@ -552,6 +575,45 @@ mod tests {
         assert_eq!(sight(&flat, &Vec3::new(0.0, 0.0, z)), Sight::FreeSpace);
         let nearer = Table::new(80, 40, 40.0, 299);
         assert_eq!(sight(&nearer, &Vec3::new(0.0, 0.0, z)), Sight::Occluded);
+    }
+
+    #[test]
+    fn the_rope_s_depth_near_a_point_is_the_median_of_its_own_measured_pixels() {
+        // Rope pixels in columns 10..13 at 590, 600 and 610 mm, one of them
+        // without depth; the table (not rope) at 700 mm.
+        let mut t = Table::new(40, 30, 100.0, 700);
+        for v in 0..30 {
+            for (u, z) in [(10, 590), (11, 600), (12, 610)] {
+                t.mask.data[v * 40 + u] = true;
+                t.depth[v * 40 + u] = z;
+            }
+            t.depth[v * 40 + 12] = if v == 15 { 0 } else { 610 };
+        }
+        let frame = t.frame();
+        let e = t.evidence(&frame, &[], 0.005);
+        let at = |u: f64, v: f64| e.rope_depth_near(Vec2::new(u, v), 1);
+        // A 3x3 window over columns 10..12: the median of nine rope pixels.
+        assert_eq!(at(11.0, 5.0), Some(0.6));
+        // Only the table around: nothing; the window's own rope pixels only.
+        assert_eq!(at(20.0, 5.0), None);
+        assert_eq!(at(13.0, 5.0), Some(0.61));
+        // Without depth at (12, 15): the eight others (590 x 3, 600 x 3, 610 x 2).
+        assert_eq!(at(11.0, 15.0), Some(0.6));
+        // Another rope's pixels are not this rope's.
+        let mut others = Mask::new(40, 30);
+        for v in 0..30 {
+            others.data[v * 40 + 10] = true;
+            others.data[v * 40 + 11] = true;
+        }
+        let shared = Evidence {
+            others: Some(&others),
+            ..e
+        };
+        assert_eq!(shared.rope_depth_near(Vec2::new(11.0, 5.0), 1), Some(0.61));
+        // Outside the image or not a number: nothing, and no panic.
+        for bad in [(-1.0, 5.0), (40.0, 5.0), (f64::NAN, 5.0), (1e300, 1e300)] {
+            assert_eq!(at(bad.0, bad.1), None);
+        }
     }
 
     #[test]

@@ -24,15 +24,18 @@ use crate::perception::segmentation::{
 use crate::perception::sharing::{OtherRopes, MAX_SHARED};
 use crate::polyline::{polyline_length, resample_uniform};
 use crate::step::{Algorithm, StepInput};
-use crate::upe::explain::StepExplanation;
 use crate::upe::occlusion::UpeReport;
 use crate::upe::registration::EmReport;
-use crate::upe::UpeTrackStep;
-use crate::visibility::{classify_nodes, visible_nodes_relative, NodeVisibility};
+use crate::visibility::{
+    classify_nodes, under_other_strand, visible_nodes_relative, NodeVisibility,
+    CROSSING_DEPTH_WINDOW_PX,
+};
 
 mod camera;
+pub mod explain;
 mod recovery;
 mod stepper;
+
 pub(crate) use camera::CameraFollowing;
 pub use recovery::{
     contradicts_evidence, RecoveryBackoff, MAX_RECOVERY_WAIT, MIN_NODES_IN_FREE_SPACE,
@@ -586,7 +589,7 @@ impl Tracker {
         let prev = state.nodes.clone();
         let not_rope = state.not_rope.clone();
         let p = &self.params;
-        let classes = self.visibility(&prev, &obs.cloud);
+        let classes = self.visibility(&prev, &obs.cloud, &self.evidence(frame, obs));
         let visible = &classes.visible;
         if !visible.iter().any(|&v| v) {
             return self.initialise_or_lose(frame, obs, Loss::JustLost);
@@ -641,16 +644,46 @@ impl Tracker {
         }
     }
 
-    /// The shared visibility test of the `previous` nodes against `cloud`.
-    fn visibility(&self, previous: &[Vec3], cloud: &[Vec3]) -> NodeVisibility {
+    /// The shared visibility test of the `previous` nodes against `cloud`;
+    /// for UPETrack with `hidden_under_crossings`, a node under another
+    /// stretch of the rope in `evidence` is hidden and partly seen.
+    fn visibility(
+        &self,
+        previous: &[Vec3],
+        cloud: &[Vec3],
+        evidence: &Evidence<'_>,
+    ) -> NodeVisibility {
         let p = &self.params;
-        classify_nodes(
+        let mut classes = classify_nodes(
             previous,
             cloud,
             p.visibility_radius,
             p.visibility_min_points as usize,
             p.visibility_min_fraction,
-        )
+        );
+        if p.algorithm == Algorithm::Upetrack && p.upetrack.hidden_under_crossings {
+            let rope_depth = |at: Vec2| evidence.rope_depth_near(at, CROSSING_DEPTH_WINDOW_PX);
+            let under = under_other_strand(previous, &self.camera, self.radius(), &rope_depth);
+            for (i, _) in under.iter().enumerate().filter(|(_, &u)| u) {
+                if classes.visible[i] {
+                    classes.visible[i] = false;
+                    classes.partly_seen[i] = true;
+                }
+            }
+        }
+        classes
+    }
+
+    /// The evidence of `frame` observed as `obs` for this tracker.
+    fn evidence<'a>(&'a self, frame: &'a Frame<'a>, obs: &'a Observation) -> Evidence<'a> {
+        Evidence {
+            frame,
+            mask: &obs.mask,
+            occlusions: &obs.occlusions,
+            camera: &self.camera,
+            radius: self.radius(),
+            others: obs.others.as_ref().map(|o| &o.pixels),
+        }
     }
 
     /// What the step of a frame gets; `camera` is the tracker's, copied so
@@ -883,49 +916,6 @@ impl Loss {
                 found_mm: found * 1000.0,
                 known_mm: known * 1000.0,
             },
-        }
-    }
-}
-
-/// What [`Tracker::explain`] found.
-#[derive(Debug, Clone)]
-pub struct FrameExplanation {
-    /// The frame's update, as [`Tracker::update`] gives it.
-    pub output: FrameOutput,
-    /// The nodes before the frame (empty when the frame initialised).
-    pub previous: Vec<Vec3>,
-    /// Cloud points within `r_vis` of each previous node (`q`).
-    pub neighbour_counts: Vec<usize>,
-    /// The shared visibility of the previous nodes.
-    pub visible: Vec<bool>,
-    /// Every stage of the UPETrack step, when the frame was tracked by one.
-    pub step: Option<StepExplanation>,
-}
-
-impl Tracker {
-    /// Explains the update of `frame` (observed as `obs`) from the present
-    /// state, without changing it: the same result [`Tracker::update`]
-    /// would give, with the stages that led to it.
-    pub fn explain(&self, frame: &Frame<'_>, obs: &Observation) -> FrameExplanation {
-        let output = self.clone().update(frame, obs);
-        let previous = match &self.state {
-            Some(s) if !s.lost => s.nodes.clone(),
-            _ => Vec::new(),
-        };
-        let classes = self.visibility(&previous, &obs.cloud);
-        let tracked = output.status == FrameStatus::Tracked;
-        let step = (tracked && self.params.algorithm == Algorithm::Upetrack).then(|| {
-            let camera = self.camera;
-            let not_rope = self.state.as_ref().map_or(&[][..], |s| &s.not_rope);
-            let input = self.step_input(&camera, frame, obs, &previous, &classes, not_rope);
-            UpeTrackStep::explain(&input, &self.params.upetrack).1
-        });
-        FrameExplanation {
-            output,
-            previous,
-            neighbour_counts: classes.counts,
-            visible: classes.visible,
-            step,
         }
     }
 }

@@ -138,6 +138,13 @@ pub struct UpeTrackParams {
     /// is where a hidden end pulled out went. Default true; false is the
     /// paper's step (hidden nodes follow their anchors only).
     pub follow_emerged_ends: bool,
+    /// A node under another stretch of the rope where the rope crosses
+    /// itself is hidden (`visibility::under_other_strand`): the images
+    /// show the stretch on top there, whose points are not the node's; it
+    /// explains its points as a partly seen node and moves with its
+    /// neighbours. Which stretch is on top is read from the depth beside
+    /// the crossing. Default true; false is the paper's visibility.
+    pub hidden_under_crossings: bool,
     /// Report each visible node on its bend's arc rather than where EM
     /// left it, the centroid of the rope points it explains, which lies
     /// inside the bend (`bends::onto_arcs`). Only the reported nodes move:
@@ -177,6 +184,7 @@ impl Default for UpeTrackParams {
             keep_end_run_spacing: true,
             follow_shared_motion: false,
             follow_emerged_ends: true,
+            hidden_under_crossings: true,
             report_on_arcs: true,
             outlier_weight: 0.1,
             em_tolerance: 1e-4,
