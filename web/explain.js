@@ -64,7 +64,7 @@ function steps(v) {
   const seen = v.visible.filter(Boolean).length;
   out.push({
     name: 'visibility', title: 'Visibility (Fig. 3)',
-    text: `A node of the previous frame is visible when at least V_lim = ${v.visibility_min_points} cloud points lie within r_vis = ${mm(p.visibility_radius)} mm of it (circles; the number is q), and at least ${fmt(p.visibility_min_fraction, 2)} of the visible nodes' median q (this project's addition; 0 gives the paper's rule). ${seen} of ${v.visible.length} are visible (green), ${v.visible.length - seen} hidden (orange).`,
+    text: `A node of the previous frame is visible when at least V_lim = ${v.visibility_min_points} cloud points lie within r_vis = ${mm(p.visibility_radius)} mm of it (circles; the number is q), and at least ${fmt(p.visibility_min_fraction, 2)} of the visible nodes' median q (this project's addition; 0 gives the paper's rule).${p.hidden_under_crossings ? ' Where the rope crosses itself, a node under the other stretch counts as hidden and explains its points without moving; the stretch on top is the one whose rope pixels read nearer beside the crossing (this project\'s addition).' : ''} ${seen} of ${v.visible.length} are visible (green), ${v.visible.length - seen} hidden (orange).`,
     draw: () => {
       dim();
       dots(v.cloud_px, COLOURS.cloud, 1.5);
