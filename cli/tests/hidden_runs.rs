@@ -131,6 +131,15 @@ fn a_hidden_wave_does_not_unroll_when_its_nodes_slide_and_are_re_spaced() {
     assert!(worst < 30.0, "worst frame {worst:.1} mm");
 }
 
+/// Every frame's error (mm) of drawn scene `seed` (48 frames) tracked with
+/// the defaults, and with the defaults as `off` changes them.
+fn drawn_with_and_without(seed: u64, off: impl FnOnce(&mut Params)) -> (Vec<f64>, Vec<f64>) {
+    let (seq, _) = written_drawn_scene(seed, 48);
+    let mut params = Params::default();
+    off(&mut params);
+    (frame_errors(&seq), frame_errors_with(&seq, params))
+}
+
 /// Regression for "a hidden end pulled out from under its occluder stays
 /// behind" (drawn scene 1010 of the tuning range: a 0.52 m two-tone rope in
 /// a wave, a hand over its last 15 % from frame 12, that end pulled 21.5 cm
@@ -140,11 +149,8 @@ fn a_hidden_wave_does_not_unroll_when_its_nodes_slide_and_are_re_spaced() {
 /// rope (`follow_emerged_ends`) the worst frame is 5 mm.
 #[test]
 fn a_hidden_end_pulled_out_from_under_its_occluder_follows_the_rope_that_came_out() {
-    let (seq, _) = written_drawn_scene(1010, 48);
-    let followed = max(&frame_errors(&seq));
-    let mut params = Params::default();
-    params.upetrack.follow_emerged_ends = false;
-    let left = max(&frame_errors_with(&seq, params));
+    let (on, off) = drawn_with_and_without(1010, |p| p.upetrack.follow_emerged_ends = false);
+    let (followed, left) = (max(&on), max(&off));
     eprintln!("drawn scene 1010: worst frame {followed:.1} mm, {left:.1} mm left behind");
     assert!(followed < 10.0, "worst frame {followed:.1} mm");
     assert!(
@@ -163,11 +169,8 @@ fn a_hidden_end_pulled_out_from_under_its_occluder_follows_the_rope_that_came_ou
 /// beside the crossing) 5.64 mm.
 #[test]
 fn a_node_under_the_stretch_on_top_where_the_rope_crosses_itself_is_hidden() {
-    let (seq, _) = written_drawn_scene(1016, 48);
-    let hidden = mean(&frame_errors(&seq));
-    let mut params = Params::default();
-    params.upetrack.hidden_under_crossings = false;
-    let mixed = mean(&frame_errors_with(&seq, params));
+    let (on, off) = drawn_with_and_without(1016, |p| p.upetrack.hidden_under_crossings = false);
+    let (hidden, mixed) = (mean(&on), mean(&off));
     eprintln!("drawn scene 1016: {hidden:.2} mm, {mixed:.2} mm with the crossing's nodes mixed");
     assert!(hidden < 6.5, "mean {hidden:.2} mm");
     assert!(

@@ -9,6 +9,7 @@ use alloc::vec::Vec;
 
 use super::camera::{depth_noise, CameraIntrinsics};
 use super::frame::Frame;
+use super::point_cloud::median_around;
 use super::segmentation::{Mask, Rect};
 use crate::math::{Vec2, Vec3};
 
@@ -173,17 +174,12 @@ impl Evidence<'_> {
         if !(at.x >= 0.0 && at.y >= 0.0 && at.x < w && at.y < h) {
             return None;
         }
-        let (u, v) = (libm::round(at.x) as i64, libm::round(at.y) as i64);
-        let mut found: Vec<f64> = Vec::new();
-        for y in v - half..=v + half {
-            for x in u - half..=u + half {
-                if self.mask.get(x, y) && !self.other_rope_at(x, y) {
-                    found.extend(self.depth_at_pixel(x, y));
-                }
-            }
-        }
-        found.sort_unstable_by(f64::total_cmp);
-        found.get(found.len() / 2).copied()
+        let pixel = (libm::round(at.x) as i64, libm::round(at.y) as i64);
+        median_around(pixel, half, &mut Vec::new(), |x, y| {
+            (self.mask.get(x, y) && !self.other_rope_at(x, y))
+                .then(|| self.depth_at_pixel(x, y))
+                .flatten()
+        })
     }
 
     /// The depth measured at the pixel `p` projects to, metres; `None` out

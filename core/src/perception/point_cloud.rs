@@ -47,6 +47,23 @@ pub fn depth_at(frame: &Frame<'_>, i: usize, settings: &CloudSettings) -> Option
     (z >= settings.min_depth && z <= settings.max_depth).then_some(z)
 }
 
+/// The median of what `value(x, y)` gives over the pixels within `half`
+/// of `(u, v)` (a square window), `None` where it gives nothing; the
+/// values are gathered in `scratch`, cleared first.
+pub fn median_around(
+    (u, v): (i64, i64),
+    half: i64,
+    scratch: &mut Vec<f64>,
+    value: impl Fn(i64, i64) -> Option<f64>,
+) -> Option<f64> {
+    scratch.clear();
+    for y in v - half..=v + half {
+        scratch.extend((u - half..=u + half).filter_map(|x| value(x, y)));
+    }
+    scratch.sort_unstable_by(f64::total_cmp);
+    scratch.get(scratch.len() / 2).copied()
+}
+
 /// Deprojects every masked pixel with a valid depth.
 pub fn deproject_mask(
     frame: &Frame<'_>,

@@ -35,7 +35,11 @@ impl Tracker {
             Some(s) if !s.lost => s.nodes.clone(),
             _ => Vec::new(),
         };
-        let classes = self.visibility(&previous, &obs.cloud, &self.evidence(frame, obs));
+        let classes = self.visibility(
+            &previous,
+            &obs.cloud,
+            &self.evidence(&self.camera, frame, obs),
+        );
         let tracked = output.status == FrameStatus::Tracked;
         let step = (tracked && self.params.algorithm == Algorithm::Upetrack).then(|| {
             let camera = self.camera;

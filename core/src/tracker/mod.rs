@@ -596,7 +596,7 @@ impl Tracker {
         let prev = state.nodes.clone();
         let not_rope = state.not_rope.clone();
         let p = &self.params;
-        let classes = self.visibility(&prev, &obs.cloud, &self.evidence(frame, obs));
+        let classes = self.visibility(&prev, &obs.cloud, &self.evidence(&self.camera, frame, obs));
         let visible = &classes.visible;
         if !visible.iter().any(|&v| v) {
             return self.initialise_or_lose(frame, obs, Loss::JustLost);
@@ -681,13 +681,19 @@ impl Tracker {
         classes
     }
 
-    /// The evidence of `frame` observed as `obs` for this tracker.
-    fn evidence<'a>(&'a self, frame: &'a Frame<'a>, obs: &'a Observation) -> Evidence<'a> {
+    /// The evidence of `frame` observed as `obs` for this tracker's rope,
+    /// seen by `camera` (the tracker's, or a copy of it).
+    fn evidence<'a>(
+        &self,
+        camera: &'a CameraIntrinsics,
+        frame: &'a Frame<'a>,
+        obs: &'a Observation,
+    ) -> Evidence<'a> {
         Evidence {
             frame,
             mask: &obs.mask,
             occlusions: &obs.occlusions,
-            camera: &self.camera,
+            camera,
             radius: self.radius(),
             others: obs.others.as_ref().map(|o| &o.pixels),
         }
@@ -711,14 +717,7 @@ impl Tracker {
             visible: &classes.visible,
             partly_seen: &classes.partly_seen,
             camera,
-            evidence: Some(Evidence {
-                frame,
-                mask: &obs.mask,
-                occlusions: &obs.occlusions,
-                camera,
-                radius: self.radius(),
-                others: obs.others.as_ref().map(|o| &o.pixels),
-            }),
+            evidence: Some(self.evidence(camera, frame, obs)),
             rest_length: self.rest_length,
         }
     }

@@ -8,7 +8,7 @@ use alloc::vec::Vec;
 use crate::math::{Vec2, Vec3};
 use crate::perception::camera::CameraIntrinsics;
 use crate::perception::frame::Frame;
-use crate::perception::point_cloud::{depth_at, push_along_rays, CloudSettings};
+use crate::perception::point_cloud::{depth_at, median_around, push_along_rays, CloudSettings};
 use crate::perception::segmentation::Mask;
 
 /// Half side of the window searched for depth around a centre-line pixel.
@@ -28,24 +28,15 @@ pub(super) fn depths_along(
 ) -> Vec<Option<f64>> {
     let width = frame.width as i64;
     let mut window = Vec::new();
+    let rope_depth = |x: i64, y: i64| {
+        mask.get(x, y)
+            .then(|| depth_at(frame, (y * width + x) as usize, settings))
+            .flatten()
+    };
     path.iter()
         .map(|p| {
-            let (u, v) = (libm::round(p.x) as i64, libm::round(p.y) as i64);
-            window.clear();
-            for dv in -DEPTH_WINDOW_RADIUS..=DEPTH_WINDOW_RADIUS {
-                for du in -DEPTH_WINDOW_RADIUS..=DEPTH_WINDOW_RADIUS {
-                    if mask.get(u + du, v + dv) {
-                        let i = ((v + dv) * width + (u + du)) as usize;
-                        if let Some(z) = depth_at(frame, i, settings) {
-                            window.push(z);
-                        }
-                    }
-                }
-            }
-            (!window.is_empty()).then(|| {
-                window.sort_unstable_by(f64::total_cmp);
-                window[window.len() / 2]
-            })
+            let pixel = (libm::round(p.x) as i64, libm::round(p.y) as i64);
+            median_around(pixel, DEPTH_WINDOW_RADIUS, &mut window, rope_depth)
         })
         .collect()
 }
