@@ -8,7 +8,8 @@
 //! whatever else moved on its own weighed out by a robust loss. Taken only
 //! when it explains the images significantly better than no motion and
 //! nearly all pixels that decide side with it, so a still camera reads
-//! still.
+//! still; a slide along the table only when its brightness shows it (the
+//! depth of a plain table shows its tilt and distance, not the slide).
 
 use alloc::vec;
 use alloc::vec::Vec;
@@ -91,6 +92,12 @@ const WHOLE_BACKGROUND_SHARE: f64 = 0.9;
 /// Fewest decisive pixels the share is judged on: ten votes all one way
 /// happen by chance about once in a thousand (`2^-10`).
 const MIN_DECISIVE: usize = 10;
+/// A slide in the table's plane is taken when it explains more of the
+/// textured pixels better than chance would: more than half of them by
+/// this many deviations of a fair coin's count (a one-sided sign test at
+/// 0.999). Pixels of noise, where a plain table offers no texture, side
+/// with a made-up slide about half the time whatever its size.
+const SLIDE_SIGN_SIGMAS: f64 = 3.09;
 /// A pixel is decisive when its own loss changes by more than the
 /// chi-square of one degree of freedom at 0.95 (in units of the
 /// residuals' variance, twice the loss).
@@ -106,6 +113,12 @@ const DEPTH_AGREEMENT: f32 = 0.02;
 /// units of the residuals' variance) the motion must explain the images
 /// than no motion to be taken.
 pub(crate) const SIGNIFICANCE: f64 = 22.46;
+/// The chi-square of three degrees of freedom at 0.999, for a model of
+/// three parameters tested at the level [`SIGNIFICANCE`] sets for six: how
+/// much better the slide in the table's plane must explain the brightness
+/// than the motion without it (and the glance's inverse depth's affine
+/// model).
+pub(crate) const SIGNIFICANCE_3: f64 = 16.27;
 /// Ridge on the normal equations, relative to their mean curvature: what
 /// the background leaves undetermined (a flat, plain table's slide) is
 /// taken as no motion.
@@ -706,16 +719,17 @@ type Row = (Option<Residual>, Option<Residual>);
 /// A residual and its Jacobian in the motion's increment.
 type Residual = (f64, SVector<f64, 6>);
 
-fn residuals(templates: &[Template], later: &Level, motion: &RigidMotion) -> Rows {
+fn residuals(templates: &[Template], later: &Level, motion: &RigidMotion, normal: &Vec3) -> Rows {
     let mut rows = Vec::with_capacity(templates.len());
     for t in templates {
-        rows.push(residual(t, later, motion));
+        rows.push(residual(t, later, motion, normal));
     }
     rows
 }
 
-/// [`residuals`] of one template.
-fn residual(t: &Template, later: &Level, motion: &RigidMotion) -> Option<Row> {
+/// [`residuals`] of one template; `normal` is the table's in the earlier
+/// frame.
+fn residual(t: &Template, later: &Level, motion: &RigidMotion, normal: &Vec3) -> Option<Row> {
     let p = motion.apply(&t.point);
     if !(p.z > 0.0) {
         return None;
@@ -737,7 +751,18 @@ fn residual(t: &Template, later: &Level, motion: &RigidMotion) -> Option<Row> {
         .flatten()
         .map(|(zx, zy)| {
             let along = du * zx + dv * zy - Vec3::new(0.0, 0.0, 1.0);
-            (z - p.z, increment(along))
+            // A slide along the table (of `normal`, carried into the later
+            // frame) keeps it where it was: its depth cannot see one. Noisy
+            // depth gradients would make it seem to, so that part of the
+            // Jacobian is left out.
+            let n = motion.rotation * normal;
+            let j = increment(along);
+            let (jt, jr) = (Vec3::new(j[0], j[1], j[2]), Vec3::new(j[3], j[4], j[5]));
+            let (jt, jr) = (n * n.dot(&jt), jr - n * n.dot(&jr));
+            (
+                z - p.z,
+                SVector::<f64, 6>::new(jt.x, jt.y, jt.z, jr.x, jr.y, jr.z),
+            )
         });
     (photometric.is_some() || depth.is_some()).then_some((photometric, depth))
 }
@@ -767,8 +792,14 @@ fn loss((b, d): &Row, (sb, sd): (f64, f64)) -> f64 {
 
 /// One Gauss-Newton update of `motion` and how much it is predicted to
 /// lower the robust loss (twice, in units of the residuals' variance), or
-/// `None` when the normal equations cannot be solved.
-fn update(rows: &Rows, (sb, sd): (f64, f64)) -> Option<(SVector<f64, 6>, f64)> {
+/// `None` when the normal equations cannot be solved. With `flat`, the
+/// update is held to the motions that leave the table's plane slide-free
+/// (the columns of [`flat_basis`]).
+fn update(
+    rows: &Rows,
+    (sb, sd): (f64, f64),
+    flat: Option<&SMatrix<f64, 6, 3>>,
+) -> Option<(SVector<f64, 6>, f64)> {
     let mut a = SMatrix::<f64, 6, 6>::zeros();
     let mut g = SVector::<f64, 6>::zeros();
     let mut add = |r: f64, j: &SVector<f64, 6>, s: f64| {
@@ -787,14 +818,170 @@ fn update(rows: &Rows, (sb, sd): (f64, f64)) -> Option<(SVector<f64, 6>, f64)> {
         }
     }
     a.fill_upper_triangle_with_lower_triangle();
-    let scale = a.trace() / 6.0;
-    if !(scale > 0.0) {
-        return None;
-    }
-    a += SMatrix::<f64, 6, 6>::identity() * (RIDGE * scale);
-    let x = -a.cholesky()?.solve(&g);
+    let x = match flat {
+        None => {
+            let scale = a.trace() / 6.0;
+            if !(scale > 0.0) {
+                return None;
+            }
+            a += SMatrix::<f64, 6, 6>::identity() * (RIDGE * scale);
+            -a.cholesky()?.solve(&g)
+        }
+        Some(basis) => {
+            let mut ar = basis.transpose() * a * basis;
+            let scale = ar.trace() / 3.0;
+            if !(scale > 0.0) {
+                return None;
+            }
+            ar += SMatrix::<f64, 3, 3>::identity() * (RIDGE * scale);
+            -(basis * ar.cholesky()?.solve(&(basis.transpose() * g)))
+        }
+    };
     let predicted = -g.dot(&x);
     x.iter().all(|v| v.is_finite()).then_some((x, predicted))
+}
+
+/// `motion` moved by the increment `x` (translation, rotation vector), and
+/// how far that moves the background, pixels of a level of focal `fx` at
+/// `depth` metres.
+fn moved_by(motion: &RigidMotion, x: &SVector<f64, 6>, fx: f64, depth: f64) -> (RigidMotion, f64) {
+    let (v, w) = (Vec3::new(x[0], x[1], x[2]), Vec3::new(x[3], x[4], x[5]));
+    let turn: Matrix3<f64> = rotation_of(&w);
+    let moved = RigidMotion {
+        rotation: turn * motion.rotation,
+        translation: turn * motion.translation + v,
+    };
+    (moved, fx * (v.norm() / depth + w.norm()))
+}
+
+/// The increments that do not slide the plane of unit `normal` within
+/// itself (as columns: translation along the normal, turns about two axes
+/// in the plane): what the depth of a plain table can tell.
+fn flat_basis(normal: &Vec3) -> SMatrix<f64, 6, 3> {
+    let n = *normal;
+    // Any axis across the normal, from the camera axis it is least along.
+    let other = if n.x.abs() <= n.y.abs() && n.x.abs() <= n.z.abs() {
+        Vec3::x()
+    } else if n.y.abs() <= n.z.abs() {
+        Vec3::y()
+    } else {
+        Vec3::z()
+    };
+    let a = n.cross(&other).normalize();
+    let b = n.cross(&a);
+    let mut basis = SMatrix::<f64, 6, 3>::zeros();
+    basis.fixed_view_mut::<3, 1>(0, 0).copy_from(&n);
+    basis.fixed_view_mut::<3, 1>(3, 1).copy_from(&a);
+    basis.fixed_view_mut::<3, 1>(3, 2).copy_from(&b);
+    basis
+}
+
+/// `motion` without its slide in the plane of unit `normal` (its
+/// translation along the plane, its turn about the normal).
+fn without_slide(motion: &RigidMotion, normal: &Vec3) -> RigidMotion {
+    let turn = nalgebra::Rotation3::from_matrix_unchecked(motion.rotation).scaled_axis();
+    RigidMotion {
+        rotation: rotation_of(&(turn - normal * normal.dot(&turn))),
+        translation: normal * normal.dot(&motion.translation),
+    }
+}
+
+/// How a motion's rows compare with another motion's on the pixels both
+/// follow, at deviations `s`.
+#[derive(Debug, Default)]
+struct Tally {
+    /// Pixels both follow.
+    points: usize,
+    /// Twice the robust loss's drop from `other` to `rows`.
+    gain: f64,
+    /// Pixels whose own loss changes by more than [`DECISIVE`].
+    decisive: usize,
+    /// Of those, the ones `rows` explains better.
+    better: usize,
+    /// Pixels `rows` explains better, decisive or not.
+    improved: usize,
+}
+
+impl Tally {
+    /// `rows` against `other`: brightness and depth, or with
+    /// `brightness_only` the brightness alone.
+    fn of(rows: &Rows, other: &Rows, s: (f64, f64), brightness_only: bool) -> Self {
+        let mut t = Self::default();
+        for (m, n) in rows.iter().zip(other) {
+            let (Some(m), Some(n)) = (m, n) else {
+                continue;
+            };
+            let drop = if brightness_only {
+                let (Some((mb, _)), Some((nb, _))) = (m.0, n.0) else {
+                    continue;
+                };
+                2.0 * (cauchy_loss(nb / s.0) - cauchy_loss(mb / s.0))
+            } else {
+                2.0 * (loss(n, s) - loss(m, s))
+            };
+            t.points += 1;
+            t.gain += drop;
+            t.improved += usize::from(drop > 0.0);
+            if drop.abs() > DECISIVE {
+                t.decisive += 1;
+                t.better += usize::from(drop > 0.0);
+            }
+        }
+        t
+    }
+
+    /// Significant at `significance` and shared by nearly every decisive
+    /// pixel ([`WHOLE_BACKGROUND_SHARE`], of at least [`MIN_DECISIVE`]).
+    fn taken(&self, significance: f64) -> bool {
+        self.gain > significance
+            && self.decisive >= MIN_DECISIVE
+            && self.better as f64 >= WHOLE_BACKGROUND_SHARE * self.decisive as f64
+    }
+
+    /// Significant at `significance` and explaining more pixels better
+    /// than chance would ([`SLIDE_SIGN_SIGMAS`]).
+    fn more_than_chance(&self, significance: f64) -> bool {
+        let n = self.points as f64;
+        let chance = 0.5 * n + SLIDE_SIGN_SIGMAS * 0.5 * libm::sqrt(n);
+        self.gain > significance && self.improved as f64 > chance
+    }
+}
+
+/// `motion`, or when the brightness does not show its slide in the
+/// table's plane (of unit `normal`) the motion that best explains the
+/// `templates` on `later` without one: the depth of a plain table tells
+/// its tilt and distance but not where along it the camera went, and a
+/// slide read from noisy depth gradients alone ran to 15 cm a frame
+/// (drawn scene 4046, a handheld camera over a dark table).
+fn slide_seen_or_none(
+    motion: RigidMotion,
+    templates: &[Template],
+    later: &Level,
+    normal: &Vec3,
+    depth: f64,
+) -> RigidMotion {
+    let moved = residuals(templates, later, &motion, normal);
+    let mut flat = without_slide(&motion, normal);
+    let unslid = residuals(templates, later, &flat, normal);
+    if Tally::of(&moved, &unslid, spreads(&moved), true).more_than_chance(SIGNIFICANCE_3) {
+        return motion;
+    }
+    let basis = flat_basis(normal);
+    for _ in 0..MAX_ITERATIONS {
+        let rows = residuals(templates, later, &flat, normal);
+        if rows.iter().flatten().count() < MIN_POINTS {
+            break;
+        }
+        let Some((x, _)) = update(&rows, spreads(&rows), Some(&basis)) else {
+            break;
+        };
+        let (next, shift) = moved_by(&flat, &x, later.fx, depth);
+        flat = next;
+        if shift < CONVERGED_PX {
+            break;
+        }
+    }
+    flat
 }
 
 /// The camera's estimated motion between two frames.
@@ -824,6 +1011,7 @@ pub fn camera_motion(earlier: &BackgroundView, later: &BackgroundView) -> Option
     }
     let mut motion = RigidMotion::identity();
     let mut finest = None;
+    let mut depth_of_finest = 0.0;
     let on_plane = { support_plane(&spread_points(&earlier.levels[0]), earlier.focal)? };
     for (k, (e, l)) in earlier.levels.iter().zip(&later.levels).enumerate().rev() {
         if e.width != l.width || e.height != l.height {
@@ -835,22 +1023,17 @@ pub fn camera_motion(earlier: &BackgroundView, later: &BackgroundView) -> Option
         let depth =
             templates.iter().map(|t| t.point.z).sum::<f64>() / templates.len().max(1) as f64;
         for _ in 0..MAX_ITERATIONS {
-            let rows = residuals(&templates, l, &motion);
+            let rows = residuals(&templates, l, &motion, &on_plane.normal);
             if rows.iter().flatten().count() < MIN_POINTS {
                 break;
             }
-            let Some((x, predicted)) = update(&rows, spreads(&rows)) else {
+            let Some((x, predicted)) = update(&rows, spreads(&rows), None) else {
                 break;
             };
-            let (v, w) = (Vec3::new(x[0], x[1], x[2]), Vec3::new(x[3], x[4], x[5]));
-            let turn: Matrix3<f64> = rotation_of(&w);
-            motion = RigidMotion {
-                rotation: turn * motion.rotation,
-                translation: turn * motion.translation + v,
-            };
+            let shift;
+            (motion, shift) = moved_by(&motion, &x, l.fx, depth);
             // The finest level refines to CONVERGED_PX; a coarser one
             // stops once the next can take over.
-            let shift = l.fx * (v.norm() / depth + w.norm());
             let converged = if k == 0 {
                 shift < CONVERGED_PX
             } else {
@@ -860,42 +1043,45 @@ pub fn camera_motion(earlier: &BackgroundView, later: &BackgroundView) -> Option
                 break;
             }
         }
+        depth_of_finest = depth;
         finest = Some(templates);
     }
     let templates = finest?;
-    let moved = residuals(&templates, &later.levels[0], &motion);
-    let still = residuals(&templates, &later.levels[0], &RigidMotion::identity());
-    // Judged on the pixels both follow, at the motion's deviations.
-    let s = spreads(&moved);
-    let (mut points, mut gain, mut shift) = (0, 0.0, 0.0);
-    let (mut better, mut decisive) = (0usize, 0usize);
     let finest = &later.levels[0];
-
+    let motion = slide_seen_or_none(
+        motion,
+        &templates,
+        finest,
+        &on_plane.normal,
+        depth_of_finest,
+    );
+    let moved = residuals(&templates, finest, &motion, &on_plane.normal);
+    let still = residuals(
+        &templates,
+        finest,
+        &RigidMotion::identity(),
+        &on_plane.normal,
+    );
+    // Judged on the pixels both follow, at the motion's deviations.
+    let tally = Tally::of(&moved, &still, spreads(&moved), false);
+    let mut shift = 0.0;
     for ((m, n), t) in moved.iter().zip(&still).zip(&templates) {
-        if let (Some(m), Some(n)) = (m, n) {
-            points += 1;
-            let drop = 2.0 * (loss(n, s) - loss(m, s));
-            gain += drop;
-            if drop.abs() > DECISIVE {
-                decisive += 1;
-                better += usize::from(drop > 0.0);
-            }
+        if m.is_some() && n.is_some() {
             let (p, q) = (t.point, motion.apply(&t.point));
             let du = finest.fx * (q.x / q.z - p.x / p.z);
             let dv = finest.fy * (q.y / q.z - p.y / p.z);
             shift += libm::sqrt(du * du + dv * dv);
         }
     }
+    let points = tally.points;
     let shift_px = shift / points.max(1) as f64;
-    let support = better as f64 / decisive.max(1) as f64;
+    let support = tally.better as f64 / tally.decisive.max(1) as f64;
     let resolved = shift_px >= MIN_RESOLVED_SHIFT;
-    let shared = decisive >= MIN_DECISIVE && support >= WHOLE_BACKGROUND_SHARE;
-    let taken =
-        points >= MIN_POINTS && resolved && shared && gain > SIGNIFICANCE && motion.is_finite();
+    let taken = points >= MIN_POINTS && resolved && tally.taken(SIGNIFICANCE) && motion.is_finite();
     taken.then_some(CameraMotion {
         motion,
         points,
-        gain,
+        gain: tally.gain,
         shift_px,
         support,
     })
@@ -1020,6 +1206,7 @@ pub(crate) mod fixture {
 mod tests {
     use super::fixture::*;
     use super::*;
+    use crate::rng::SplitMix64;
 
     fn background(images: &(Vec<u8>, Vec<u16>), rope: &Mask) -> BackgroundView {
         let frame =
@@ -1064,6 +1251,100 @@ mod tests {
             let p = Vec3::new(0.0, 0.0, 0.8);
             assert!((m.motion.apply(&p) - p).norm() < 0.001, "{m:?}");
         }
+    }
+
+    /// `images` with the depth noise of a D435i at 640x480 (twice the
+    /// fixture's focal length) at each pixel's depth.
+    fn noisy_depth(mut images: (Vec<u8>, Vec<u16>), seed: u64) -> (Vec<u8>, Vec<u16>) {
+        let mut rng = SplitMix64::new(seed);
+        for z in images.1.iter_mut() {
+            let metres = *z as f64 * 0.001;
+            let noise = crate::perception::camera::depth_noise(metres, 2.0 * CAMERA.fx);
+            *z = libm::round((metres + noise * rng.normal()) * 1000.0) as u16;
+        }
+        images
+    }
+
+    #[test]
+    fn a_plain_table_s_tilt_does_not_bring_a_made_up_slide_along() {
+        // The camera turns about its own x axis over a plain table: the
+        // depth shows the tilt, nothing shows a slide along the table.
+        let turn = Vec3::new(0.02, 0.0, 0.0);
+        let a = background(
+            &noisy_depth(view(HOME, Vec3::zeros(), false, 1.0, 1, None), 3),
+            &no_rope(),
+        );
+        let b = background(
+            &noisy_depth(view(HOME, turn, false, 1.0, 2, None), 4),
+            &no_rope(),
+        );
+        let base = Matrix3::new(1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, -1.0);
+        let truth =
+            RigidMotion::between_camera_poses(&base, &HOME, &(rotation_of(&turn) * base), &HOME);
+        let p = Vec3::new(0.0, 0.0, 0.8);
+        let moved = (truth.apply(&p) - p).norm();
+        let found = camera_motion(&a, &b).map_or(p, |m| m.motion.apply(&p));
+        let error = (found - truth.apply(&p)).norm();
+        assert!(error < 0.1 * moved, "{error} of {moved}");
+    }
+
+    #[test]
+    fn the_depth_rows_cannot_see_a_slide_along_the_table() {
+        let turn = Vec3::new(0.3, 0.1, 0.0);
+        let images = noisy_depth(view(HOME, turn, true, 2.0, 1, None), 5);
+        let a = background(&images, &no_rope());
+        let level = &a.levels[0];
+        let plane = support_plane(&spread_points(level), a.focal).expect("the table");
+        let templates = templates(level, a.noise, &plane, a.focal);
+        assert!(templates.len() > 100, "{}", templates.len());
+        let n = plane.normal;
+        let across = n.cross(&Vec3::x()).normalize();
+        let slides = [
+            SVector::<f64, 6>::new(across.x, across.y, across.z, 0.0, 0.0, 0.0),
+            SVector::<f64, 6>::new(0.0, 0.0, 0.0, n.x, n.y, n.z),
+        ];
+        let rows = residuals(&templates, level, &RigidMotion::identity(), &n);
+        let mut depth_rows = 0;
+        for (_, depth) in rows.iter().flatten() {
+            if let Some((_, j)) = depth {
+                depth_rows += 1;
+                for s in &slides {
+                    assert!(j.dot(s).abs() < 1e-9 * j.norm(), "{j}");
+                }
+                // What the tilt and the distance change, they see.
+                assert!((flat_basis(&n).transpose() * j).norm() > 0.5 * j.norm());
+            }
+        }
+        assert!(depth_rows > 100, "{depth_rows}");
+    }
+
+    #[test]
+    fn a_motion_without_its_slide_keeps_its_tilt_and_its_distance() {
+        let normal = Vec3::new(0.0, -0.34, -0.94).normalize();
+        let basis = flat_basis(&normal);
+        // The basis is orthonormal and holds no slide.
+        let gram = basis.transpose() * basis;
+        assert!((gram - Matrix3::identity()).norm() < 1e-12, "{gram}");
+        for column in basis.column_iter() {
+            let (t, w) = (column.fixed_rows::<3>(0), column.fixed_rows::<3>(3));
+            assert!((t - normal * normal.dot(&t)).norm() < 1e-12);
+            assert!(normal.dot(&w).abs() < 1e-12);
+        }
+        let across = normal.cross(&Vec3::x()).normalize();
+        let tilt = across * 0.01;
+        let slide = RigidMotion {
+            rotation: rotation_of(&(normal * 0.02)),
+            translation: across * 0.05 + normal * 0.003,
+        };
+        let both = RigidMotion {
+            rotation: rotation_of(&tilt) * slide.rotation,
+            translation: rotation_of(&tilt) * slide.translation,
+        };
+        let flat = without_slide(&both, &normal);
+        let left = nalgebra::Rotation3::from_matrix_unchecked(flat.rotation).scaled_axis();
+        assert!((left - tilt).norm() < 3e-4, "{left} against {tilt}");
+        assert!(normal.cross(&flat.translation).norm() < 1e-12);
+        assert!((normal.dot(&flat.translation) - normal.dot(&both.translation)).abs() < 1e-12);
     }
 
     #[test]

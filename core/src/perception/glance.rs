@@ -20,7 +20,9 @@ use nalgebra::{SMatrix, SVector};
 
 use crate::math::{median_abs, MAD_TO_SIGMA};
 use crate::perception::camera::CameraIntrinsics;
-use crate::perception::ego_motion::{agreed_depth, FINEST_WIDTH, MIN_POINTS, SIGNIFICANCE};
+use crate::perception::ego_motion::{
+    agreed_depth, FINEST_WIDTH, MIN_POINTS, SIGNIFICANCE, SIGNIFICANCE_3,
+};
 use crate::perception::frame::Frame;
 use crate::perception::segmentation::{Mask, Rect};
 
@@ -28,10 +30,6 @@ use crate::perception::segmentation::{Mask, Rect};
 /// a tenth of a pixel on a textured table explains several times the
 /// test's threshold with this many.
 pub const GLANCE_SAMPLES: usize = 2048;
-/// The chi-square of three degrees of freedom at 0.999: the inverse
-/// depth's affine model is tested at the level [`SIGNIFICANCE`] sets for
-/// the six of a motion.
-const SIGNIFICANCE_3: f64 = 16.27;
 /// A sample the fit leaves further than this many robust deviations from
 /// it is something moving on its own (a hand, a gripper) and is left out:
 /// a Gaussian residual goes so far about once in 16,000 samples.
