@@ -14,8 +14,8 @@ use crate::perception::ego_motion::CameraMotion;
 use crate::perception::evidence::Evidence;
 use crate::perception::frame::{Frame, FrameError};
 use crate::perception::initialisation::{
-    initialise, one_rope_thick, InitError, InitGuide, InitReport, Initialisation, PriorError,
-    RopePrior, DIAMETER_PRIOR_FACTOR,
+    initialise, InitError, InitGuide, InitReport, Initialisation, PriorError, RopePrior,
+    DIAMETER_PRIOR_FACTOR,
 };
 use crate::perception::point_cloud::build_cloud;
 use crate::perception::segmentation::{
@@ -27,10 +27,10 @@ use crate::step::{Algorithm, StepInput};
 use crate::upe::occlusion::UpeReport;
 use crate::upe::registration::EmReport;
 use crate::visibility::{
-    classify_nodes, under_other_strand, visible_nodes_relative, NodeVisibility,
-    CROSSING_DEPTH_WINDOW_PX,
+    classify_nodes, under_other_strand, NodeVisibility, CROSSING_DEPTH_WINDOW_PX,
 };
 
+mod adopt;
 mod camera;
 pub mod explain;
 mod recovery;
@@ -800,64 +800,6 @@ impl Tracker {
             }
         }
         Ok(init)
-    }
-
-    /// Whether `init` found a rope as thick as the one tracked (the
-    /// diameters the initialisation measures, within the factor its
-    /// fragments are joined with): a recovery replaces a state that
-    /// contradicts the images with the same rope only, not with a box's
-    /// dark edge beside it (drawn scene 1032).
-    fn as_thick_as_tracked(&self, init: &Initialisation) -> bool {
-        match (init.diameter(), self.known_diameter) {
-            (Some(a), Some(b)) => one_rope_thick(a, b),
-            _ => true,
-        }
-    }
-
-    /// Takes `init` as the state.
-    fn adopt(&mut self, init: Initialisation, frame: &Frame<'_>, obs: &Observation) -> FrameOutput {
-        if self.known_length.is_none() {
-            self.known_length = Some(init.length);
-            self.known_radius = init.radius;
-            self.known_diameter = init.diameter();
-            self.rest_length = Some(crate::upe::length::rest_length(
-                polyline_length(&init.nodes),
-                self.radius(),
-            ));
-        }
-        // The cloud left out parts too wide for the old state's rope: the
-        // new nodes are judged against the whole mask's.
-        let whole;
-        let cloud = if obs.too_wide > 0 {
-            whole = build_cloud(frame, &obs.mask, &self.camera, &self.cloud_settings());
-            &whole
-        } else {
-            &obs.cloud
-        };
-        let p = &self.params;
-        let visible = visible_nodes_relative(
-            &init.nodes,
-            cloud,
-            p.visibility_radius,
-            p.visibility_min_points as usize,
-            p.visibility_min_fraction,
-        );
-        self.refused_jump_cloud = None;
-        self.state = Some(TrackState {
-            nodes: init.nodes.clone(),
-            lost: false,
-            not_rope: self.not_rope_after(&init.nodes, &visible, cloud),
-        });
-        self.stepper.start(&init.nodes);
-        FrameOutput {
-            nodes: init.nodes,
-            visible,
-            status: FrameStatus::Initialised,
-            em: None,
-            upe: None,
-            trackdlo: None,
-            init: Some(init.report),
-        }
     }
 
     /// Initialises from this frame, or reports it lost (holding the nodes

@@ -245,6 +245,26 @@ pub fn extend_short_ends(
     (out, report)
 }
 
+/// The nodes of a re-initialisation on a rope found shorter than its
+/// `rest_length` (part of it hidden, or out of the image): the missing
+/// length laid along the ends' tangents as far as `allows` lets a rope go
+/// (where the images show rope or something hides it) by
+/// [`extend_short_ends`], and the same number of nodes spread evenly over
+/// the whole. Laid over the part found alone, every spacing was short by
+/// the missing share and the hidden rest had no node.
+pub fn laid_whole_length(
+    nodes: &[Vec3],
+    rest_length: f64,
+    allows: &dyn Fn(&Vec3) -> bool,
+) -> Vec<Vec3> {
+    let (longer, report) = extend_short_ends(nodes, rest_length, OpenEnds::BOTH, allows);
+    if report.head + report.tail > 0.0 {
+        resample_uniform(&longer, nodes.len())
+    } else {
+        nodes.to_vec()
+    }
+}
+
 /// Resampling (Eq. 12-15) that keeps each hidden run at an end of the rope
 /// at the rest spacing `l0 = L0 / (M - 1)`: the `head` hidden nodes at the
 /// start of `nodes` and the `tail` at its end are placed `l0` apart along
