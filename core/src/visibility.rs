@@ -95,12 +95,14 @@ pub fn classify_nodes(
 
 /// Nodes that lie under another stretch of the rope where it crosses
 /// itself. A node's disc in the image (the rope's radius at its depth)
-/// overlaps a stretch at least [`MIN_STRAND_GAP_NODES`] nodes away, the two
-/// cross at an angle, and the rope measured along the node's own stretch a
-/// little beyond the crossing (`rope_depth`, the depth of the rope's pixels
-/// around an image point) lies more than a radius deeper than along the
-/// other stretch: there the images show the other stretch only. The
-/// tracked depths are not read: near a crossing EM has mixed them.
+/// overlaps a stretch far enough away along the rope to cross it
+/// ([`MIN_STRAND_GAP_NODES`] nodes and [`MIN_LOOP_DIAMETERS`] diameters),
+/// the two cross at an angle, and the rope measured along the node's own
+/// stretch a little beyond the crossing (`rope_depth`, the depth of the
+/// rope's pixels around an image point) lies more than a radius deeper
+/// than along the other stretch: there the images show the other stretch
+/// only. The tracked depths are not read: near a crossing EM has mixed
+/// them.
 pub fn under_other_strand(
     nodes: &[Vec3],
     camera: &CameraIntrinsics,
@@ -122,6 +124,40 @@ pub fn under_other_strand(
         );
         unit(b - a)
     };
+    // Each segment's start, unit direction and length in the image.
+    let segments: Vec<Option<(Vec2, Vec2, f64)>> = (0..m - 1)
+        .map(|j| {
+            let (b0, b1) = (projected[j]?, projected[j + 1]?);
+            let d = unit(b1 - b0)?;
+            Some((b0, d, (b1 - b0).norm()))
+        })
+        .collect();
+    // The segments by the x of their middles, and the largest reach
+    // across x a segment can have from a node's disc: half the longest
+    // segment and the largest disc.
+    let mut by_x: Vec<(f64, usize)> = segments
+        .iter()
+        .enumerate()
+        .filter_map(|(j, s)| s.map(|(b0, d, l)| ((b0 + d * (0.5 * l)).x, j)))
+        .collect();
+    by_x.sort_unstable_by(|p, q| p.0.total_cmp(&q.0));
+    let half_longest = segments
+        .iter()
+        .flatten()
+        .fold(0.0, |h: f64, s| h.max(0.5 * s.2));
+    let nearest = nodes
+        .iter()
+        .map(|p| p.z)
+        .filter(|z| *z > 0.0)
+        .fold(f64::INFINITY, f64::min);
+    let r_max = radius * focal / nearest;
+    // Arc length to each node, for the shortest loop between two stretches.
+    let mut arc = Vec::with_capacity(m);
+    arc.push(0.0);
+    for w in nodes.windows(2) {
+        arc.push(arc[arc.len() - 1] + (w[1] - w[0]).norm());
+    }
+    let loop_length = MIN_LOOP_DIAMETERS * 2.0 * radius;
     let mean_depth = |at: Vec2, d: Vec2, reach: f64| {
         let found: Vec<f64> = [at + d * reach, at - d * reach]
             .into_iter()
@@ -134,35 +170,45 @@ pub fn under_other_strand(
             continue;
         };
         let r_i = radius * focal / nodes[i].z;
-        under[i] = (0..m - 1)
-            .filter(|&j| j + 1 + MIN_STRAND_GAP_NODES <= i || j >= i + MIN_STRAND_GAP_NODES)
-            .any(|j| {
-                let (Some(b0), Some(b1)) = (projected[j], projected[j + 1]) else {
-                    return false;
-                };
-                let Some(db) = unit(b1 - b0) else {
-                    return false;
-                };
-                let t = (a - b0).dot(&db).clamp(0.0, (b1 - b0).norm());
-                let c = b0 + db * t;
-                let z_c = nodes[j].z + (nodes[j + 1].z - nodes[j].z) * t / (b1 - b0).norm();
-                if !(z_c > 0.0) {
-                    return false;
-                }
-                let r_c = radius * focal / z_c;
-                let sin = da.x * db.y - da.y * db.x;
-                if (a - c).norm() >= r_i + r_c || libm::fabs(sin) < MIN_CROSSING_SINE {
-                    return false;
-                }
-                // Where the two stretches' lines meet.
-                let s = ((c - a).x * db.y - (c - a).y * db.x) / sin;
-                let x = a + da * s;
-                let reach = CROSSING_PROBE_RADII * r_i.max(r_c);
-                match (mean_depth(x, da, reach), mean_depth(x, db, reach)) {
-                    (Some(own), Some(other)) => own > other + radius,
-                    _ => false,
-                }
-            });
+        let apart = |j: usize| {
+            let nodes_apart = j + 1 + MIN_STRAND_GAP_NODES <= i || j >= i + MIN_STRAND_GAP_NODES;
+            let along = if j < i {
+                arc[i] - arc[j + 1]
+            } else {
+                arc[j] - arc[i]
+            };
+            nodes_apart && along >= loop_length
+        };
+        // Only the segments whose middles lie within reach across x.
+        let reach_x = half_longest + r_i + r_max;
+        let first = by_x.partition_point(|&(x, _)| x < a.x - reach_x);
+        let near = by_x[first..]
+            .iter()
+            .take_while(|&&(x, _)| x <= a.x + reach_x);
+        under[i] = near.map(|&(_, j)| j).filter(|&j| apart(j)).any(|j| {
+            let Some((b0, db, length)) = segments[j] else {
+                return false;
+            };
+            let t = (a - b0).dot(&db).clamp(0.0, length);
+            let c = b0 + db * t;
+            let z_c = nodes[j].z + (nodes[j + 1].z - nodes[j].z) * t / length;
+            if !(z_c > 0.0) {
+                return false;
+            }
+            let r_c = radius * focal / z_c;
+            let sin = da.x * db.y - da.y * db.x;
+            if (a - c).norm() >= r_i + r_c || libm::fabs(sin) < MIN_CROSSING_SINE {
+                return false;
+            }
+            // Where the two stretches' lines meet.
+            let s = ((c - a).x * db.y - (c - a).y * db.x) / sin;
+            let x = a + da * s;
+            let reach = CROSSING_PROBE_RADII * r_i.max(r_c);
+            match (mean_depth(x, da, reach), mean_depth(x, db, reach)) {
+                (Some(own), Some(other)) => own > other + radius,
+                _ => false,
+            }
+        });
     }
     under
 }
@@ -170,6 +216,13 @@ pub fn under_other_strand(
 /// Fewest nodes between a node and a stretch of the rope that may lie
 /// over it ([`under_other_strand`]): its neighbours' segments touch it.
 pub const MIN_STRAND_GAP_NODES: usize = 2;
+
+/// Shortest rope between two stretches that cross, in the rope's
+/// diameters: to lie over itself a rope turns a whole loop, whose
+/// perimeter is at least pi diameters (its bend at least a radius); closer
+/// along the rope, nodes are one stretch however many there are (at 400
+/// nodes every node's disc covered a dozen neighbours' segments).
+pub const MIN_LOOP_DIAMETERS: f64 = core::f64::consts::PI;
 
 /// Two stretches meeting at a smaller angle (sine) run side by side.
 pub const MIN_CROSSING_SINE: f64 = 0.5;
@@ -336,6 +389,27 @@ mod tests {
         // Stretches less than a radius apart in depth: neither.
         let under = under_other_strand(&nodes, &camera(), radius, &surface(0.996, 1.0, radius));
         assert!(!under.contains(&true));
+    }
+
+    #[test]
+    fn nodes_closer_along_the_rope_than_a_loop_are_one_stretch() {
+        // 18 nodes a quarter radius apart round half a bend of one and a
+        // half radii, 1 m away, over a surface whose depth curves steeply:
+        // nodes a few apart overlap and meet at an angle, but no rope
+        // crosses itself in less than a loop.
+        let radius = 0.0075;
+        let bend = 1.5 * radius;
+        let nodes: Vec<Vec3> = (0..18)
+            .map(|k| {
+                let angle = 0.25 * radius * k as f64 / bend;
+                Vec3::new(bend * libm::cos(angle), bend * libm::sin(angle), 1.0)
+            })
+            .collect();
+        let (cx, cy) = (camera().cx, camera().cy);
+        // Deeper along x than along y: probes along a stretch that runs
+        // closer to x read deeper.
+        let steep = |at: Vec2| Some(1.0 + 1e-3 * ((at.x - cx).powi(2) - (at.y - cy).powi(2)));
+        assert!(!under_other_strand(&nodes, &camera(), radius, &steep).contains(&true));
     }
 
     #[test]
