@@ -9,7 +9,7 @@ use crate::perception::initialisation::{one_rope_thick, Initialisation};
 use crate::perception::point_cloud::build_cloud;
 use crate::polyline::polyline_length;
 use crate::step::Algorithm;
-use crate::upe::length::laid_whole_length;
+use crate::upe::length::{laid_whole_length, rest_length};
 use crate::visibility::visible_nodes_relative;
 
 impl Tracker {
@@ -46,10 +46,7 @@ impl Tracker {
             self.known_length = Some(init.length);
             self.known_radius = init.radius;
             self.known_diameter = init.diameter();
-            self.rest_length = Some(crate::upe::length::rest_length(
-                polyline_length(&init.nodes),
-                self.radius(),
-            ));
+            self.rest_length = Some(rest_length(polyline_length(&init.nodes), self.radius()));
         }
         // The cloud left out parts too wide for the old state's rope: the
         // new nodes are judged against the whole mask's.
