@@ -159,11 +159,11 @@ pub fn under_other_strand(
     }
     let loop_length = MIN_LOOP_DIAMETERS * 2.0 * radius;
     let mean_depth = |at: Vec2, d: Vec2, reach: f64| {
-        let found: Vec<f64> = [at + d * reach, at - d * reach]
+        let (sum, n) = [at + d * reach, at - d * reach]
             .into_iter()
             .filter_map(rope_depth)
-            .collect();
-        (!found.is_empty()).then(|| found.iter().sum::<f64>() / found.len() as f64)
+            .fold((0.0, 0), |(s, n), z| (s + z, n + 1));
+        (n > 0).then(|| sum / n as f64)
     };
     for i in 0..m {
         let (Some(a), Some(da)) = (projected[i], direction(i)) else {

@@ -371,14 +371,16 @@ type Row = (Option<Residual>, Option<Residual>);
 type Residual = (f64, SVector<f64, 6>);
 
 fn residuals(templates: &[Template], later: &Level, motion: &RigidMotion, normal: &Vec3) -> Rows {
+    // The table's normal (in the earlier frame) carried into the later.
+    let normal = motion.rotation * normal;
     let mut rows = Vec::with_capacity(templates.len());
     for t in templates {
-        rows.push(residual(t, later, motion, normal));
+        rows.push(residual(t, later, motion, &normal));
     }
     rows
 }
 
-/// [`residuals`] of one template; `normal` is the table's in the earlier
+/// [`residuals`] of one template; `normal` is the table's in the later
 /// frame.
 fn residual(t: &Template, later: &Level, motion: &RigidMotion, normal: &Vec3) -> Option<Row> {
     let p = motion.apply(&t.point);
@@ -402,14 +404,12 @@ fn residual(t: &Template, later: &Level, motion: &RigidMotion, normal: &Vec3) ->
         .flatten()
         .map(|(zx, zy)| {
             let along = du * zx + dv * zy - Vec3::new(0.0, 0.0, 1.0);
-            // A slide along the table (of `normal`, carried into the later
-            // frame) keeps it where it was: its depth cannot see one. Noisy
-            // depth gradients would make it seem to, so that part of the
-            // Jacobian is left out.
-            let n = motion.rotation * normal;
+            // A slide along the table (of `normal`) keeps it where it was:
+            // its depth cannot see one. Noisy depth gradients would make it
+            // seem to, so that part of the Jacobian is left out.
             let j = increment(along);
             let (jt, jr) = (Vec3::new(j[0], j[1], j[2]), Vec3::new(j[3], j[4], j[5]));
-            let (jt, jr) = (n * n.dot(&jt), jr - n * n.dot(&jr));
+            let (jt, jr) = (normal * normal.dot(&jt), jr - normal * normal.dot(&jr));
             (
                 z - p.z,
                 SVector::<f64, 6>::new(jt.x, jt.y, jt.z, jr.x, jr.y, jr.z),
@@ -609,30 +609,56 @@ fn slide_seen_or_none(
     templates: &[Template],
     later: &Level,
     normal: &Vec3,
-    depth: f64,
 ) -> RigidMotion {
     let moved = residuals(templates, later, &motion, normal);
-    let mut flat = without_slide(&motion, normal);
+    let flat = without_slide(&motion, normal);
     let unslid = residuals(templates, later, &flat, normal);
     if Tally::of(&moved, &unslid, spreads(&moved), true).more_than_chance(SIGNIFICANCE_3) {
         return motion;
     }
-    let basis = flat_basis(normal);
+    fit(
+        templates,
+        later,
+        flat,
+        normal,
+        Some(&flat_basis(normal)),
+        true,
+    )
+}
+
+/// Gauss-Newton from `motion` on `templates` against `later` (of the
+/// table's `normal`), held to the columns of `flat` when given. The
+/// `finest` level refines until an update moves the background by less
+/// than [`CONVERGED_PX`]; a coarser one stops once the next can take over.
+fn fit(
+    templates: &[Template],
+    later: &Level,
+    mut motion: RigidMotion,
+    normal: &Vec3,
+    flat: Option<&SMatrix<f64, 6, 3>>,
+    finest: bool,
+) -> RigidMotion {
+    let depth = templates.iter().map(|t| t.point.z).sum::<f64>() / templates.len().max(1) as f64;
     for _ in 0..MAX_ITERATIONS {
-        let rows = residuals(templates, later, &flat, normal);
+        let rows = residuals(templates, later, &motion, normal);
         if rows.iter().flatten().count() < MIN_POINTS {
             break;
         }
-        let Some((x, _)) = update(&rows, spreads(&rows), Some(&basis)) else {
+        let Some((x, predicted)) = update(&rows, spreads(&rows), flat) else {
             break;
         };
-        let (next, shift) = moved_by(&flat, &x, later.fx, depth);
-        flat = next;
-        if shift < CONVERGED_PX {
+        let shift;
+        (motion, shift) = moved_by(&motion, &x, later.fx, depth);
+        let converged = if finest {
+            shift < CONVERGED_PX
+        } else {
+            shift < COARSE_CONVERGED_PX || predicted < CONVERGED_GAIN
+        };
+        if converged {
             break;
         }
     }
-    flat
+    motion
 }
 
 /// The camera's estimated motion between two frames.
@@ -662,7 +688,6 @@ pub fn camera_motion(earlier: &BackgroundView, later: &BackgroundView) -> Option
     }
     let mut motion = RigidMotion::identity();
     let mut finest = None;
-    let mut depth_of_finest = 0.0;
     let on_plane = { support_plane(&spread_points(&earlier.levels[0]), earlier.focal)? };
     for (k, (e, l)) in earlier.levels.iter().zip(&later.levels).enumerate().rev() {
         if e.width != l.width || e.height != l.height {
@@ -671,41 +696,12 @@ pub fn camera_motion(earlier: &BackgroundView, later: &BackgroundView) -> Option
         // Halving averages four pixels: half the noise per level.
         let noise = earlier.noise / (1u32 << k) as f64;
         let templates = templates(e, noise, &on_plane, earlier.focal);
-        let depth =
-            templates.iter().map(|t| t.point.z).sum::<f64>() / templates.len().max(1) as f64;
-        for _ in 0..MAX_ITERATIONS {
-            let rows = residuals(&templates, l, &motion, &on_plane.normal);
-            if rows.iter().flatten().count() < MIN_POINTS {
-                break;
-            }
-            let Some((x, predicted)) = update(&rows, spreads(&rows), None) else {
-                break;
-            };
-            let shift;
-            (motion, shift) = moved_by(&motion, &x, l.fx, depth);
-            // The finest level refines to CONVERGED_PX; a coarser one
-            // stops once the next can take over.
-            let converged = if k == 0 {
-                shift < CONVERGED_PX
-            } else {
-                shift < COARSE_CONVERGED_PX || predicted < CONVERGED_GAIN
-            };
-            if converged {
-                break;
-            }
-        }
-        depth_of_finest = depth;
+        motion = fit(&templates, l, motion, &on_plane.normal, None, k == 0);
         finest = Some(templates);
     }
     let templates = finest?;
     let finest = &later.levels[0];
-    let motion = slide_seen_or_none(
-        motion,
-        &templates,
-        finest,
-        &on_plane.normal,
-        depth_of_finest,
-    );
+    let motion = slide_seen_or_none(motion, &templates, finest, &on_plane.normal);
     let moved = residuals(&templates, finest, &motion, &on_plane.normal);
     let still = residuals(
         &templates,

@@ -671,10 +671,14 @@ impl Tracker {
         if p.algorithm == Algorithm::Upetrack && p.upetrack.hidden_under_crossings {
             let rope_depth = |at: Vec2| evidence.rope_depth_near(at, CROSSING_DEPTH_WINDOW_PX);
             let under = under_other_strand(previous, &self.camera, self.radius(), &rope_depth);
-            for (i, _) in under.iter().enumerate().filter(|(_, &u)| u) {
-                if classes.visible[i] {
-                    classes.visible[i] = false;
-                    classes.partly_seen[i] = true;
+            for ((visible, partly), under) in classes
+                .visible
+                .iter_mut()
+                .zip(classes.partly_seen.iter_mut())
+                .zip(under)
+            {
+                if under && *visible {
+                    (*visible, *partly) = (false, true);
                 }
             }
         }
