@@ -266,13 +266,20 @@ impl Params {
         self.cloud_for_radius(self.dlo_radius)
     }
 
-    /// The point cloud settings for a rope of radius `radius`, metres.
+    /// The point cloud settings for a rope of radius `radius`, metres, seen
+    /// over its whole width.
     pub fn cloud_for_radius(&self, radius: f64) -> CloudSettings {
+        self.cloud_with_push(radius * SURFACE_TO_AXIS_RATIO)
+    }
+
+    /// The point cloud settings with the points pushed `axis_offset` metres
+    /// along their rays.
+    pub fn cloud_with_push(&self, axis_offset: f64) -> CloudSettings {
         CloudSettings {
             min_depth: self.min_depth,
             max_depth: self.max_depth,
             voxel_size: self.voxel_size,
-            axis_offset: radius * SURFACE_TO_AXIS_RATIO,
+            axis_offset,
             downsampling: self.downsampling(),
         }
     }

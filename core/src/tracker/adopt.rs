@@ -45,6 +45,7 @@ impl Tracker {
         if self.known_length.is_none() {
             self.known_length = Some(init.length);
             self.known_radius = init.radius;
+            self.known_cover = init.mask_cover;
             self.known_diameter = init.diameter();
             self.rest_length = Some(rest_length(polyline_length(&init.nodes), self.radius()));
         }

@@ -14,8 +14,8 @@ use crate::perception::ego_motion::CameraMotion;
 use crate::perception::evidence::Evidence;
 use crate::perception::frame::{Frame, FrameError};
 use crate::perception::initialisation::{
-    initialise, InitError, InitGuide, InitReport, Initialisation, PriorError, RopePrior,
-    DIAMETER_PRIOR_FACTOR,
+    initialise, strip_push, InitError, InitGuide, InitReport, Initialisation, PriorError,
+    RopePrior, DIAMETER_PRIOR_FACTOR,
 };
 use crate::perception::point_cloud::build_cloud;
 use crate::perception::segmentation::{
@@ -233,6 +233,8 @@ pub struct TrackerSnapshot {
     #[cfg_attr(feature = "serde", serde(default))]
     known_radius: Option<f64>,
     #[cfg_attr(feature = "serde", serde(default))]
+    known_cover: Option<f64>,
+    #[cfg_attr(feature = "serde", serde(default))]
     known_diameter: Option<f64>,
     #[cfg_attr(feature = "serde", serde(default))]
     rest_length: Option<f64>,
@@ -252,8 +254,11 @@ pub struct Tracker {
     state: Option<TrackState>,
     /// Length at the first initialisation, metres.
     known_length: Option<f64>,
-    /// Radius measured at the first initialisation, metres.
+    /// Radius measured at the first initialisation (its mask's), metres.
     known_radius: Option<f64>,
+    /// The share of the rope's width its mask covered at the first
+    /// initialisation, as the depth image showed it.
+    known_cover: Option<f64>,
     /// The rope's diameter as the first initialisation measured it (the
     /// candidate taken), metres: what a recovery must find again.
     known_diameter: Option<f64>,
@@ -292,6 +297,7 @@ impl Tracker {
             state: None,
             known_length: None,
             known_radius: None,
+            known_cover: None,
             known_diameter: None,
             rest_length: None,
             refused_jump_cloud: None,
@@ -445,6 +451,7 @@ impl Tracker {
             state: self.state.clone(),
             known_length: self.known_length,
             known_radius: self.known_radius,
+            known_cover: self.known_cover,
             known_diameter: self.known_diameter,
             rest_length: self.rest_length,
             refused_jump_cloud: self.refused_jump_cloud,
@@ -468,6 +475,7 @@ impl Tracker {
         let lengths = [
             snapshot.known_length,
             snapshot.known_radius,
+            snapshot.known_cover,
             snapshot.known_diameter,
             snapshot.rest_length,
         ];
@@ -484,6 +492,7 @@ impl Tracker {
         });
         self.known_length = snapshot.known_length;
         self.known_radius = snapshot.known_radius;
+        self.known_cover = snapshot.known_cover;
         self.known_diameter = snapshot.known_diameter;
         self.rest_length = snapshot.rest_length;
         self.refused_jump_cloud = snapshot.refused_jump_cloud;
@@ -502,6 +511,7 @@ impl Tracker {
         self.state = None;
         self.known_length = None;
         self.known_radius = None;
+        self.known_cover = None;
         self.known_diameter = None;
         self.rest_length = None;
         self.refused_jump_cloud = None;
@@ -545,23 +555,18 @@ impl Tracker {
                 .fold(f64::INFINITY, f64::min),
             _ => f64::INFINITY,
         };
+        let whole = |mask: &Mask, too_wide| RopeCloud {
+            points: build_cloud(frame, mask, &self.camera, &settings),
+            too_wide,
+        };
         if !nearest.is_finite() {
-            return RopeCloud {
-                points: build_cloud(frame, mask, &self.camera, &settings),
-                too_wide: 0,
-            };
+            return whole(mask, 0);
         }
         let f = self.camera.fx.max(self.camera.fy);
         let widest = DIAMETER_PRIOR_FACTOR * 2.0 * self.radius() * f / nearest;
         match without_wide_parts(mask, widest) {
-            None => RopeCloud {
-                points: build_cloud(frame, mask, &self.camera, &settings),
-                too_wide: 0,
-            },
-            Some((rope, too_wide)) => RopeCloud {
-                points: build_cloud(frame, &rope, &self.camera, &settings),
-                too_wide,
-            },
+            None => whole(mask, 0),
+            Some((rope, too_wide)) => whole(&rope, too_wide),
         }
     }
 
@@ -578,8 +583,23 @@ impl Tracker {
         }
     }
 
+    /// The cloud's settings: pushed from the surface the mask sees to the
+    /// axis of the rope in force, wider than its mask where the mask
+    /// covered only a strip of it at the first initialisation.
     fn cloud_settings(&self) -> crate::perception::point_cloud::CloudSettings {
-        self.params.cloud_for_radius(self.radius())
+        let radius = self.radius();
+        match self.known_cover {
+            Some(c) if self.params.estimate_radius => {
+                // A prior's diameter is the rope's; a measured radius, its mask's.
+                let rope = if self.prior.diameter.is_some() {
+                    radius
+                } else {
+                    radius / c
+                };
+                self.params.cloud_with_push(strip_push(rope, c))
+            }
+            _ => self.params.cloud_for_radius(radius),
+        }
     }
 
     /// The tracking step on an observation of `frame`. Never fails: a frame

@@ -13,6 +13,7 @@
 //! the reasons for each rule.
 
 mod candidates;
+mod cross_section;
 mod graph;
 mod lift;
 mod report;
@@ -27,6 +28,11 @@ pub use candidates::{
     JOIN_GAP_FRACTION, MAX_JOIN_ANGLE_DEGREES, MAX_TURN_PER_WIDTH_DEGREES, MIN_EVEN_SHARE,
     MIN_FRAGMENT_ELONGATION, MIN_ROPE_ELONGATION, ROPE_DIAMETER_RANGE, THICK_RATIO, WIDTH_SLACK_PX,
 };
+pub use cross_section::{
+    mask_cover, strip_depth_ratio, strip_push, BACKGROUND_FROM_HALF_WIDTHS,
+    BACKGROUND_TO_HALF_WIDTHS, MAX_SECTION_SAMPLES, MIN_SECTION_HALF_WIDTH_PX, MIN_SECTION_SAMPLES,
+    SECTION_CONTRAST_SIGMAS,
+};
 pub use graph::{MAX_CROSSING_TURN_DEGREES, MAX_JUNCTION_CELLS};
 use lift::{line_through, resolve_crossings};
 pub use report::{Candidate, ChoiceRule, InitReport, NotRope, SetAside};
@@ -34,7 +40,7 @@ pub use skeleton::{MAX_SHAPES, SPUR_DISCS};
 
 use super::camera::CameraIntrinsics;
 use super::frame::Frame;
-use super::point_cloud::{CloudSettings, SURFACE_TO_AXIS_RATIO};
+use super::point_cloud::CloudSettings;
 use super::segmentation::Mask;
 use crate::math::{Vec2, Vec3};
 use crate::polyline::{distance_to_polyline, polyline_length, resample_uniform};
@@ -185,9 +191,14 @@ pub struct Initialisation {
     pub nodes: Vec<Vec3>,
     /// Length of the centre line, metres.
     pub length: f64,
-    /// The rope's radius estimated from its width in the image, metres
-    /// (`None` when not asked for or not measurable).
+    /// The rope's radius estimated from its mask's width in the image,
+    /// metres (`None` when not asked for or not measurable): the half width
+    /// of the strip the colour range covers.
     pub radius: Option<f64>,
+    /// The share of the rope's width its mask covers, as the depth image
+    /// shows it ([`mask_cover`]; `None` where not measured): the rope's
+    /// radius is `radius` over it.
+    pub mask_cover: Option<f64>,
     /// What was found and why this was taken.
     pub report: InitReport,
 }
@@ -217,8 +228,7 @@ pub fn estimate_radius(
     line: &[Vec3],
     camera: &CameraIntrinsics,
 ) -> Option<f64> {
-    let length_px: f64 = path.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
-    if !(length_px > 0.0) || line.is_empty() {
+    if !(mask_half_width_px(blob_pixels, path) > 0.0) || line.is_empty() {
         return None;
     }
     let mut z: Vec<f64> = line.iter().map(|p| p.z).filter(|z| z.is_finite()).collect();
@@ -226,11 +236,22 @@ pub fn estimate_radius(
         return None;
     }
     z.sort_by(f64::total_cmp);
-    let width_px = blob_pixels as f64 / length_px;
-    let r = 0.5 * width_px * z[z.len() / 2] / (0.5 * (camera.fx + camera.fy));
+    let r =
+        mask_half_width_px(blob_pixels, path) * z[z.len() / 2] / (0.5 * (camera.fx + camera.fy));
     (MIN_ESTIMATED_RADIUS..=MAX_ESTIMATED_RADIUS)
         .contains(&r)
         .then_some(r)
+}
+
+/// Half the mean width of a mask of `blob_pixels` along `path`, pixels
+/// (0 for a path without length).
+fn mask_half_width_px(blob_pixels: usize, path: &[Vec2]) -> f64 {
+    let length_px: f64 = path.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
+    if length_px > 0.0 {
+        0.5 * blob_pixels as f64 / length_px
+    } else {
+        0.0
+    }
 }
 
 /// What initialisation needs from the parameters.
@@ -459,12 +480,15 @@ pub fn initialise(
     resolve_crossings(&mut depths, &zones);
     let mut line = line_through(&path, &depths, camera, settings.cloud.axis_offset)
         .ok_or(InitError::NoDepth)?;
-    let mut radius = None;
+    let (mut radius, mut cover) = (None, None);
     if settings.estimate_radius {
         radius = estimate_radius(chain.pixels as usize, &path, &line, camera);
         if let Some(r) = radius {
-            // Lift again, pushed to the axis of a rope of this radius.
-            line = line_through(&path, &depths, camera, r * SURFACE_TO_AXIS_RATIO)
+            let half_px = mask_half_width_px(chain.pixels as usize, &path);
+            cover = mask_cover(frame, mask, camera, &settings.cloud, &path, &zones, half_px);
+            let c = cover.unwrap_or(1.0);
+            // Lift again, pushed to the axis of a rope this wide.
+            line = line_through(&path, &depths, camera, strip_push(r / c, c))
                 .ok_or(InitError::NoDepth)?;
         }
     }
@@ -504,6 +528,7 @@ pub fn initialise(
         nodes: resample_uniform(&line, settings.node_count),
         length,
         radius,
+        mask_cover: cover,
         report,
     })
 }
