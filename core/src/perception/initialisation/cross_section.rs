@@ -218,6 +218,16 @@ mod tests {
         assert!((strip_depth_ratio(0.6) - mean).abs() < 1e-9);
     }
 
+    #[test]
+    fn a_mask_over_a_strip_of_the_rope_is_pushed_farther_than_over_its_whole_width() {
+        let r = 0.005;
+        assert!((strip_push(r, 1.0) - r * core::f64::consts::FRAC_PI_4).abs() < 1e-15);
+        // A mask over 0.7 of the width: the rope's radius is r / 0.7, the
+        // strip's mean surface h(0.7) = 0.911 of it in front of the axis.
+        let pushed = strip_push(r / 0.7, 0.7);
+        assert!((pushed / r - 1.301).abs() < 0.001, "{}", pushed / r);
+    }
+
     /// A cylinder of radius `r` lying on a table along the image's x axis
     /// at `z` metres, seen straight down by a 600 px camera; depth in mm,
     /// and a mask over the share `cover` of its width.
