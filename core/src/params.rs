@@ -53,7 +53,11 @@ pub struct Params {
     pub dlo_radius: f64,
     /// Measure the rope's radius at initialisation from its width in the
     /// image and its depth (5-20 mm ropes alike), and use that instead of
-    /// `dlo_radius`. Default true; false keeps `dlo_radius` throughout.
+    /// `dlo_radius`; and read across the rope in depth how much of its
+    /// width the mask covers (a grey or white rope's shaded edges fall out
+    /// of its colour range), the cloud pushed from that strip's mean
+    /// surface to the axis (`perception::initialisation::mask_cover`).
+    /// Default true; false keeps `dlo_radius` throughout.
     pub estimate_radius: bool,
     /// Nearest valid depth, metres. Default 0.1 m.
     pub min_depth: f64,

@@ -175,7 +175,7 @@ pub const PARAMETERS: &[ParamInfo] = &[
         "estimate_radius",
         Shared,
         "r est.",
-        "Measure the radius from the rope's width and depth at initialisation",
+        "Measure the radius from the rope's width and depth at initialisation, and in depth how much of its width the colour range covers (a strip: pushed farther, to the strip's mean surface)",
         ParamKind::Bool,
     ),
     p(
