@@ -475,12 +475,15 @@ impl Tracker {
         let lengths = [
             snapshot.known_length,
             snapshot.known_radius,
-            snapshot.known_cover,
             snapshot.known_diameter,
             snapshot.rest_length,
         ];
         if lengths.iter().flatten().any(|l| !l.is_finite() || *l < 0.0) {
             return bad("a length is negative or not finite");
+        }
+        // The push divides by it.
+        if snapshot.known_cover.is_some_and(|c| !(c > 0.0 && c <= 1.0)) {
+            return bad("the share of the rope's width its mask covers is not in (0, 1]");
         }
         let mut restart = snapshot.stepper.algorithm() != self.params.algorithm;
         self.state = snapshot.state.map(|mut s| {
@@ -555,18 +558,18 @@ impl Tracker {
                 .fold(f64::INFINITY, f64::min),
             _ => f64::INFINITY,
         };
-        let whole = |mask: &Mask, too_wide| RopeCloud {
+        let cloud_of = |mask: &Mask, too_wide| RopeCloud {
             points: build_cloud(frame, mask, &self.camera, &settings),
             too_wide,
         };
         if !nearest.is_finite() {
-            return whole(mask, 0);
+            return cloud_of(mask, 0);
         }
         let f = self.camera.fx.max(self.camera.fy);
         let widest = DIAMETER_PRIOR_FACTOR * 2.0 * self.radius() * f / nearest;
         match without_wide_parts(mask, widest) {
-            None => whole(mask, 0),
-            Some((rope, too_wide)) => whole(&rope, too_wide),
+            None => cloud_of(mask, 0),
+            Some((rope, too_wide)) => cloud_of(&rope, too_wide),
         }
     }
 
@@ -993,6 +996,15 @@ mod tests {
         let mut bad = t.snapshot();
         bad.known_length = Some(f64::INFINITY);
         assert!(t.restore(bad).is_err());
+        // A cover of nothing would push the cloud infinitely far.
+        for cover in [0.0, -0.5, 1.5, f64::NAN] {
+            let mut bad = t.snapshot();
+            bad.known_cover = Some(cover);
+            assert!(t.restore(bad).is_err(), "cover {cover}");
+        }
+        let mut fine = t.snapshot();
+        fine.known_cover = Some(0.8);
+        t.restore(fine).expect("a cover in (0, 1]");
     }
 
     #[test]
