@@ -4,7 +4,9 @@
 //! mask is a strip along the middle of the rope, which a push of pi/4 of
 //! the strip's half width left in front of the axis.
 
-use upetrack::{Frame, Params, Tracker};
+mod common;
+use common::scenes::each_frame_of;
+use upetrack::Params;
 use upetrack_synth::Scenario;
 
 /// A drawn scene of the tuning range: a white rope 11 mm thick at rest,
@@ -14,21 +16,17 @@ const WHITE_SEED: u64 = 1019;
 /// The mean offset along the viewing ray (mm, positive: behind the true
 /// centre line) of the visible nodes over the scene's frames.
 fn mean_ray_offset(seed: u64) -> f64 {
-    let mut s = Scenario::random(seed, 48);
-    let camera = s.camera();
-    let mut tracker = Tracker::new(Params::default(), camera, s.hsv()).expect("tracker");
     let mut offsets = Vec::new();
-    while let Some(f) = s.next_frame() {
-        let frame =
-            Frame::new(camera.width, camera.height, &f.rgb, &f.depth, 0.001).expect("frame");
-        let out = tracker
-            .process(&frame, &s.occlusions_at(f.index))
-            .expect("process");
-        assert!(!out.is_lost(), "frame {} lost", f.index);
-        for (p, _) in out.nodes.iter().zip(&out.visible).filter(|(_, v)| **v) {
-            offsets.extend(upetrack_io::eval::ray_offset(p, &f.groundtruth).map(|o| o * 1000.0));
-        }
-    }
+    each_frame_of(
+        Scenario::random(seed, 48),
+        Params::default(),
+        |f, out, _| {
+            for (p, _) in out.nodes.iter().zip(&out.visible).filter(|(_, v)| **v) {
+                offsets
+                    .extend(upetrack_io::eval::ray_offset(p, &f.groundtruth).map(|o| o * 1000.0));
+            }
+        },
+    );
     assert!(offsets.len() > 100, "{} visible nodes", offsets.len());
     offsets.iter().sum::<f64>() / offsets.len() as f64
 }

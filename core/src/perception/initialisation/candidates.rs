@@ -258,7 +258,8 @@ fn extend_end(walk: &mut super::graph::Walk, head: bool, labels: &[u32], width: 
     }
 }
 
-fn median(values: &mut [f64]) -> f64 {
+/// The median of `values` (NaN when empty), reordering them.
+pub(super) fn median(values: &mut [f64]) -> f64 {
     if values.is_empty() {
         return f64::NAN;
     }

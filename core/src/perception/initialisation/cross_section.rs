@@ -8,6 +8,7 @@
 
 use alloc::vec::Vec;
 
+use super::candidates::median;
 use super::lift::NO_ZONE;
 use crate::math::Vec2;
 use crate::perception::camera::{depth_noise, CameraIntrinsics};
@@ -189,12 +190,6 @@ impl SectionReader<'_> {
         }
         Some(side)
     }
-}
-
-/// The median of `values` (not empty), reordering them.
-fn median(values: &mut [f64]) -> f64 {
-    values.sort_unstable_by(f64::total_cmp);
-    values[values.len() / 2]
 }
 
 #[cfg(test)]

@@ -228,7 +228,8 @@ pub fn estimate_radius(
     line: &[Vec3],
     camera: &CameraIntrinsics,
 ) -> Option<f64> {
-    if !(mask_half_width_px(blob_pixels, path) > 0.0) || line.is_empty() {
+    let half_px = mask_half_width_px(blob_pixels, path);
+    if !(half_px > 0.0) || line.is_empty() {
         return None;
     }
     let mut z: Vec<f64> = line.iter().map(|p| p.z).filter(|z| z.is_finite()).collect();
@@ -236,8 +237,7 @@ pub fn estimate_radius(
         return None;
     }
     z.sort_by(f64::total_cmp);
-    let r =
-        mask_half_width_px(blob_pixels, path) * z[z.len() / 2] / (0.5 * (camera.fx + camera.fy));
+    let r = half_px * z[z.len() / 2] / (0.5 * (camera.fx + camera.fy));
     (MIN_ESTIMATED_RADIUS..=MAX_ESTIMATED_RADIUS)
         .contains(&r)
         .then_some(r)
