@@ -142,7 +142,7 @@ export function bindPanels() {
     const seq = state.seq;
     state.busy = state.busy.then(async () => {
       await settleLookahead();
-      await call(Request.open(seq.info.camera, state.params, state.hsv, state.rope, state.compare, seq.info.ropes || []));
+      await call(Request.open(seq.info.camera, seq.info.fps, state.params, state.hsv, state.rope, state.compare, seq.info.ropes || []));
       state.results = [];
       state.tracked = -1;
     });

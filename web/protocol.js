@@ -5,7 +5,7 @@
 // request    fields                                          reply
 // defaults   -                                               { params }
 // info       name, json {file: bytes}, images [paths]        { info }
-// open       camera, params, hsv, rope, compare, ropes       {}
+// open       camera, fps, params, hsv, rope, compare, ropes  {}
 //            (ropes: [{name, hsv, rope}] of several, or [])
 // params     params                                          { params } (validated, every field)
 // hsv        hsv {lower, upper}                              {}
@@ -29,7 +29,7 @@
 export const Request = {
   defaults: () => ({ type: 'defaults' }),
   info: (name, json, images) => ({ type: 'info', name, json, images }),
-  open: (camera, params, hsv, rope, compare, ropes = []) => ({ type: 'open', camera, params, hsv, rope, compare, ropes }),
+  open: (camera, fps, params, hsv, rope, compare, ropes = []) => ({ type: 'open', camera, fps, params, hsv, rope, compare, ropes }),
   params: (params) => ({ type: 'params', params }),
   hsv: (hsv) => ({ type: 'hsv', hsv }),
   rope: (hint, prior) => ({ type: 'rope', hint, prior }),

@@ -50,7 +50,7 @@ async function finishOpening(generation, seq) {
   const { info } = seq;
   hooks.closing();
   await settleLookahead();
-  await call(Request.open(info.camera, state.params, info.hsv, info.rope || null, state.compare, info.ropes || []));
+  await call(Request.open(info.camera, info.fps, state.params, info.hsv, info.rope || null, state.compare, info.ropes || []));
   if (generation !== state.generation) return;
   state.seq = seq;
   state.rope = info.rope || null;

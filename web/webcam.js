@@ -47,7 +47,7 @@ export async function startWebcam(onOpened) {
   };
   state.sampleName = null;
   $('sample').selectedIndex = -1;
-  await call(Request.open(camera, state.params, hsv, null, state.compare));
+  await call(Request.open(camera, state.seq.info.fps, state.params, hsv, null, state.compare));
   state.hsv = hsv;
   state.results = [];
   state.tracked = -1;

@@ -49,7 +49,7 @@ function track(t, f, m) {
 // pixel clicked on it, if any).
 function makeTracker(o, params) {
   const ropes = o.ropes.length ? o.ropes.map(({ name, hsv, rope }) => ({ name, hsv, rope })) : null;
-  const t = new WasmTracker({ camera: o.camera, params, hsv: o.hsv, rope: o.rope, ropes });
+  const t = new WasmTracker({ camera: o.camera, fps: o.fps, params, hsv: o.hsv, rope: o.rope, ropes });
   if (!ropes && o.hint) t.setRopeHint(o.hint[0], o.hint[1]);
   o.ropes.forEach((r, k) => { if (r.hint) t.setRopeHintOf(k, r.hint[0], r.hint[1]); });
   return t;
@@ -196,7 +196,7 @@ const handlers = {
     if (second) second.free();
     const params = checked(m.params);
     const ropes = (m.ropes || []).map((r) => ({ name: r.name, hsv: r.hsv, rope: r.rope, hint: r.hint || null }));
-    opened = { camera: m.camera, hsv: m.hsv, rope: m.rope || null, hint: null, ropes };
+    opened = { camera: m.camera, fps: m.fps, hsv: m.hsv, rope: m.rope || null, hint: null, ropes };
     tracker = makeTracker(opened, params);
     secondAlgorithm = m.compare || null;
     second = secondAlgorithm ? makeTracker(opened, { ...params, algorithm: secondAlgorithm }) : null;

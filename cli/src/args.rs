@@ -274,7 +274,7 @@ pub struct CompareArgs {
     #[arg(long, value_name = "DIR", default_value = "target/compare-data")]
     pub data: PathBuf,
     /// Frames of every scenario [default: 150 for static-s and dynamic-pull,
-    /// 90 for the others; 60 for drawn scenes].
+    /// 90 for the others; 48 for drawn scenes at 30 fps].
     #[arg(long, value_parser = clap::value_parser!(u32).range(COMPARE_FRAMES))]
     pub frames: Option<u32>,
     /// Algorithms, comma-separated [default: all].
@@ -293,6 +293,11 @@ pub struct CompareArgs {
     /// With --random: the range's first N seeds.
     #[arg(long, requires = "random")]
     pub count: Option<u64>,
+    /// With --random: film the drawn scenes at this many frames per second
+    /// (the same scenes, their events at the same times in seconds; the
+    /// frames grow with the rate unless --frames is given) [default: 30].
+    #[arg(long, requires = "random", value_parser = parse_fps, value_name = "FPS")]
+    pub fps: Option<f64>,
     /// Run on the scenes of several ropes instead: each rope beside the
     /// others against the same rope alone, and the identity swaps; with
     /// --random, on drawn scenes of several ropes of that seed range.
@@ -325,7 +330,7 @@ pub struct SynthArgs {
     pub scenario: SynthScenario,
     /// The folder to write (with --count, the folder of the drawn scenes' folders).
     pub dir: PathBuf,
-    /// Frames [default: 150, or 60 for random].
+    /// Frames [default: 150, or 48 for random at 30 fps].
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=upetrack_synth::MAX_FRAMES as i64))]
     pub frames: Option<u32>,
     /// The seed of the noise (and of the drawn scene).
@@ -340,6 +345,11 @@ pub struct SynthArgs {
     /// The look of the rope and scene [default: the scenario's].
     #[arg(long, value_parser = parse_variant, value_name = "VARIANT")]
     pub variant: Option<Variant>,
+    /// With random: film the drawn scene at this many frames per second
+    /// (the same scene, its events at the same times in seconds; the frames
+    /// grow with the rate unless --frames is given) [default: 30].
+    #[arg(long, value_parser = parse_fps, value_name = "FPS")]
+    pub fps: Option<f64>,
     /// Write the rope's length and diameter into dlo.json.
     #[arg(long)]
     pub rope_prior: bool,
@@ -394,6 +404,17 @@ pub enum SynthScenario {
     Several(SeveralKind),
     /// A scene of several ropes drawn from the seed.
     SeveralRandom,
+}
+
+/// A frame rate within [`upetrack_synth::FPS_RANGE`].
+fn parse_fps(text: &str) -> Result<f64, String> {
+    let (lo, hi) = upetrack_synth::FPS_RANGE;
+    match text.parse::<f64>() {
+        Ok(fps) if (lo..=hi).contains(&fps) => Ok(fps),
+        _ => Err(format!(
+            "a frame rate from {lo} to {hi} frames per second (the D435i's range)"
+        )),
+    }
 }
 
 fn parse_scenario(name: &str) -> Result<SynthScenario, String> {

@@ -24,6 +24,8 @@ struct Prepared {
     camera: upetrack::CameraIntrinsics,
     hsv: upetrack::HsvRange,
     depth_scale: f64,
+    /// Frames per second (the trackers' frame rate).
+    fps: f64,
     frames: Vec<(Vec<u8>, Vec<u16>, Vec<upetrack::Rect>)>,
     /// Decoding time of each frame's files, ms (none for rendered frames).
     decode_ms: Vec<f64>,
@@ -47,8 +49,9 @@ fn timed(p: &Prepared, params: upetrack::Params, repeats: usize) -> Result<Stage
     }
     let mut t = StageTimes::default();
     for _ in 0..repeats {
-        let mut tracker =
-            Tracker::new(params, p.camera, p.hsv).map_err(|e| CliError::input(e.to_string()))?;
+        let mut tracker = Tracker::new(params, p.camera, p.hsv)
+            .and_then(|mut t| t.set_frame_rate(p.fps).map(|()| t))
+            .map_err(|e| CliError::input(e.to_string()))?;
         let start = Instant::now();
         let mut now = move || start.elapsed().as_secs_f64() * 1000.0;
         for (rgb, depth, occ) in &p.frames {
@@ -81,6 +84,7 @@ fn timed_several(
             .map(|(hsv, prior)| {
                 let mut one = Tracker::new(params, p.camera, *hsv)?;
                 one.set_rope_prior(*prior)?;
+                one.set_frame_rate(p.fps)?;
                 Ok(one)
             })
             .collect::<Result<Vec<_>, _>>()
@@ -125,6 +129,7 @@ pub fn cmd_bench(args: &BenchArgs) -> Result<(), CliError> {
                 camera: s.camera(),
                 hsv: s.hsv(),
                 depth_scale: 0.001,
+                fps: s.fps(),
                 frames: fr,
                 decode_ms: Vec::new(),
                 ropes: Vec::new(),
@@ -151,6 +156,7 @@ pub fn cmd_bench(args: &BenchArgs) -> Result<(), CliError> {
                 camera: seq.camera,
                 hsv: seq.hsv,
                 depth_scale: seq.depth_scale,
+                fps: seq.fps,
                 frames: fr,
                 decode_ms,
                 ropes: if several {

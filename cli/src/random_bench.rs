@@ -10,13 +10,11 @@ use std::sync::Mutex;
 use serde::Serialize;
 use upetrack::{Algorithm, Params};
 use upetrack_io::eval::Summary;
-use upetrack_synth::random::{
-    MotionKind, OccluderKind, RandomScene, SeedRange, ShapeDraw, DEFAULT_RANDOM_FRAMES,
-};
+use upetrack_synth::random::{MotionKind, OccluderKind, RandomScene, SeedRange, ShapeDraw};
 use upetrack_synth::SIMULATOR_VERSION;
 
 use crate::bench_files::{ensure_written, publish};
-use crate::synth::{for_each_parallel, gathered, random_dir, write_random};
+use crate::synth::{for_each_parallel, gathered, random_dir, write_random, Filming};
 use indicatif::ProgressBar;
 
 use crate::args::CompareArgs;
@@ -51,8 +49,8 @@ struct RandomComparison {
 
 /// What the simulator makes of drawn scene `seed`: its version and the
 /// draw, so that a cached sequence of another draw is never reused.
-fn fingerprint(seed: u64, frames: usize) -> Result<String, CliError> {
-    let draw = serde_json::to_string(&RandomScene::draw(seed, frames))
+fn fingerprint(seed: u64, film: Filming) -> Result<String, CliError> {
+    let draw = serde_json::to_string(&RandomScene::draw_at(seed, film.frames, film.fps))
         .map_err(|e| CliError::input(format!("random-{seed}: {e}")))?;
     Ok(format!("simulator {SIMULATOR_VERSION}, draw {draw}\n"))
 }
@@ -242,16 +240,17 @@ pub fn run(
                 .join(" or ")
         ))
     })?;
-    let frames = args.frames.map_or(DEFAULT_RANDOM_FRAMES, |n| n as usize);
+    let film = Filming::of(args.frames, args.fps);
+    let frames = film.frames;
     let seeds: Vec<u64> = range.seeds(count).collect();
     let dirs: Vec<(u64, PathBuf)> = seeds
         .iter()
-        .map(|&s| (s, random_dir(data, s, frames)))
+        .map(|&s| (s, random_dir(data, s, film)))
         .collect();
     let bar = progress::bar(dirs.len() as u64, "scenes", "writing drawn scenes");
     for_each_parallel(&dirs, |(seed, dir)| {
-        ensure_written(dir, &fingerprint(*seed, frames)?, |partial| {
-            write_random(*seed, frames, false, partial, &ProgressBar::hidden()).map(drop)
+        ensure_written(dir, &fingerprint(*seed, film)?, |partial| {
+            write_random(*seed, film, false, partial, &ProgressBar::hidden()).map(drop)
         })?;
         bar.inc(1);
         Ok(())

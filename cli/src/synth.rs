@@ -33,7 +33,7 @@ fn write_scenario_and_video(
     bar: &ProgressBar,
 ) -> Result<usize, CliError> {
     let camera = writer.scenario().camera();
-    let fps = upetrack_io::synthetic::SYNTHETIC_FPS as u32;
+    let fps = writer.scenario().fps().round() as u32;
     let mut y4m = video.map(|_| y4m_header(camera.width, camera.height, fps));
     let n = upetrack_io::synthetic::write_scenario(
         writer,
@@ -71,6 +71,11 @@ pub fn cmd_synth(args: &SynthArgs) -> Result<(), CliError> {
             "--count is for `synth random`: a described scenario is one folder",
         ));
     }
+    if args.fps.is_some() {
+        return Err(CliError::usage(
+            "--fps is for `synth random`: a described scenario is filmed at 30 frames per second",
+        ));
+    }
     let frames = args.frames.map_or(DEFAULT_FRAMES, |n| n as usize);
     let variant = args.variant.unwrap_or_else(|| kind.default_variant());
     let mut render = variant.render();
@@ -105,6 +110,7 @@ pub fn cmd_synth(args: &SynthArgs) -> Result<(), CliError> {
 fn synth_several(kind: Option<SeveralKind>, args: &SynthArgs) -> Result<(), CliError> {
     let refused = [
         ("count", args.count.is_some()),
+        ("fps", args.fps.is_some()),
         ("hd", args.hd),
         ("variant", args.variant.is_some()),
         ("y4m", args.y4m.is_some()),
@@ -170,16 +176,48 @@ fn described_several(
 /// Frames of a described scenario when `--frames` is absent.
 const DEFAULT_FRAMES: usize = 150;
 
+/// How drawn scenes are filmed: frames and frames per second.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Filming {
+    /// Frames of each scene.
+    pub frames: usize,
+    /// Frames per second.
+    pub fps: f64,
+}
+
+impl Filming {
+    /// `--frames` and `--fps` as given: the default rate, and as many
+    /// frames as [`DEFAULT_RANDOM_FRAMES`] last at the default rate (so a
+    /// scene lasts as long at any rate).
+    pub fn of(frames: Option<u32>, fps: Option<f64>) -> Self {
+        let fps = fps.unwrap_or(upetrack_synth::SIMULATED_FPS);
+        let frames = frames.map_or_else(
+            || {
+                let seconds = DEFAULT_RANDOM_FRAMES as f64 / upetrack_synth::SIMULATED_FPS;
+                ((seconds * fps).round() as usize).max(1)
+            },
+            |n| n as usize,
+        );
+        Self { frames, fps }
+    }
+}
+
 /// The folder of drawn scene `seed` inside `dir`.
-pub fn random_dir(dir: &Path, seed: u64, frames: usize) -> std::path::PathBuf {
-    dir.join(format!("random-{seed}-{frames}f"))
+pub fn random_dir(dir: &Path, seed: u64, film: Filming) -> std::path::PathBuf {
+    let Filming { frames, fps } = film;
+    if fps == upetrack_synth::SIMULATED_FPS {
+        dir.join(format!("random-{seed}-{frames}f"))
+    } else {
+        dir.join(format!("random-{seed}-{frames}f-{fps}fps"))
+    }
 }
 
 /// `upetrack synth random <dir> [--seed S] [--count N] [--frames N] [--rope-prior]`:
 /// one drawn scene into `dir`, or with `--count` scenes `S..S+N` into
 /// folders `random-<seed>-<frames>f` inside it, two at a time.
 fn synth_random(args: &SynthArgs) -> Result<(), CliError> {
-    let frames = args.frames.map_or(DEFAULT_RANDOM_FRAMES, |n| n as usize);
+    let film = Filming::of(args.frames, args.fps);
+    let frames = film.frames;
     let refused = [
         ("hd", args.hd),
         ("variant", args.variant.is_some()),
@@ -195,7 +233,7 @@ fn synth_random(args: &SynthArgs) -> Result<(), CliError> {
     let start = Instant::now();
     let Some(count) = args.count else {
         let bar = progress::bar(frames as u64, "frames", format!("random-{seed}"));
-        write_random(seed, frames, prior, dir, &bar)?;
+        write_random(seed, film, prior, dir, &bar)?;
         bar.finish_and_clear();
         eprintln!(
             "{}: {frames} frames of random-{seed} written in {:.1} s",
@@ -209,9 +247,9 @@ fn synth_random(args: &SynthArgs) -> Result<(), CliError> {
     for_each_parallel(&seeds, |&s| {
         write_random(
             s,
-            frames,
+            film,
             prior,
-            &random_dir(dir, s, frames),
+            &random_dir(dir, s, film),
             &ProgressBar::hidden(),
         )?;
         bar.inc(1);
@@ -230,12 +268,13 @@ fn synth_random(args: &SynthArgs) -> Result<(), CliError> {
 /// Writes drawn scene `seed` into `dir` (its `scene.json` beside the contract's files).
 pub fn write_random(
     seed: u64,
-    frames: usize,
+    film: Filming,
     prior: bool,
     dir: &Path,
     bar: &ProgressBar,
 ) -> Result<usize, CliError> {
-    let writer = SyntheticWriter::new(Scenario::random(seed, frames)).with_rope_prior(prior);
+    let scenario = Scenario::random_at(seed, film.frames, film.fps);
+    let writer = SyntheticWriter::new(scenario).with_rope_prior(prior);
     write_scenario_and_video(writer, dir, None, bar)
 }
 

@@ -45,13 +45,13 @@ fn a_hidden_tip_does_not_creep_out_of_its_occluder_while_the_rope_rests() {
 
 /// Regression for "a rope at rest under an occluder drifts": with its known
 /// neighbours still, a hidden node keeps its place (`alpha` rises to 1
-/// below `rest_speed`) instead of being pulled towards Eq. 8-10's straighter
+/// below `rest_speed_m_per_s`) instead of being pulled towards Eq. 8-10's straighter
 /// continuation of the bend every frame.
 #[test]
 fn a_hidden_bend_beside_resting_nodes_is_not_pulled_straighter() {
     let (_, resting) = track_scenario(ScenarioKind::StaticS, 60, Params::default());
     let mut params = Params::default();
-    params.upetrack.rest_speed = 0.0;
+    params.upetrack.rest_speed_m_per_s = 0.0;
     let (_, fixed_alpha) = track_scenario(ScenarioKind::StaticS, 60, params);
     eprintln!(
         "static-s: occluded mean {:.2} mm (max {:.2}), fixed alpha {:.2} mm (max {:.2})",

@@ -662,7 +662,7 @@ fn a_gripper_hiding_the_held_end_does_not_drag_it_off_along_its_arm() {
     before.upetrack.smooth_resampling = false;
     before.upetrack.anchor_across_only = false;
     before.upetrack.hidden_nodes_absorb = false;
-    before.upetrack.rest_speed = 0.0;
+    before.upetrack.rest_speed_m_per_s = 0.0;
     let (_, theirs) = track_scenario_in(ScenarioKind::GripperSwing, v, 90, before);
     eprintln!(
         "gripper@hd-tilted-red: occluded mean {:.2} mm, max {:.2} mm; before the fix {:.2} mm, max {:.2} mm",

@@ -151,7 +151,7 @@ impl Params {
                 conserve_length: false,
                 across_rope_displacement: false,
                 smooth_resampling: false,
-                rest_speed: 0.0,
+                rest_speed_m_per_s: 0.0,
                 anchor_across_only: false,
                 hidden_nodes_absorb: false,
                 extend_short_ends: false,

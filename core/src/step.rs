@@ -86,6 +86,9 @@ pub struct StepInput<'a> {
     pub evidence: Option<Evidence<'a>>,
     /// The rope's length at initialisation, metres, when known.
     pub rest_length: Option<f64>,
+    /// Seconds from the previous frame to this one (`1 / fps`): what turns
+    /// a speed into a move per frame.
+    pub frame_interval: f64,
     /// Rope-coloured points in view that were not this rope on the last
     /// frame it was wholly seen (a distractor beside it), carried with the
     /// camera's motion; empty when not known.

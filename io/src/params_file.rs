@@ -8,9 +8,25 @@ use upetrack::Params;
 use crate::error::SequenceError;
 use crate::sequence::parse_json;
 
+/// Fields of earlier parameter files whose meaning changed, refused with
+/// what replaced them rather than read in the new unit.
+const REPLACED_FIELDS: [(&str, &str); 1] = [(
+    "rest_speed",
+    "`rest_speed` was in metres per frame; `rest_speed_m_per_s` replaced it, in metres per second: \
+     multiply by the frame rate (0.002 at 30 fps is 0.06)",
+)];
+
 /// Parses and validates parameters from JSON text; `path` names the source
 /// in errors.
 pub fn parse_params(text: &str, path: &str) -> Result<Params, SequenceError> {
+    if let Ok(fields) = serde_json::from_str::<serde_json::Map<String, serde_json::Value>>(text) {
+        if let Some((_, why)) = REPLACED_FIELDS
+            .iter()
+            .find(|(k, _)| fields.contains_key(*k))
+        {
+            return Err(SequenceError::invalid(path, *why));
+        }
+    }
     let params: Params = parse_json(text.as_bytes(), path)?;
     params
         .validate()
@@ -40,5 +56,18 @@ mod tests {
         );
         let e = parse_params(r#"{"no_such": 1}"#, "p.json").expect_err("unknown");
         assert!(e.to_string().contains("unknown field `no_such`"), "{e}");
+    }
+
+    #[test]
+    fn a_rest_speed_per_frame_is_refused_not_read_per_second() {
+        let e = parse_params(r#"{"rest_speed": 0.002}"#, "old.json")
+            .expect_err("per frame")
+            .to_string();
+        assert!(
+            e.starts_with("old.json: ") && e.contains("rest_speed_m_per_s"),
+            "{e}"
+        );
+        let p = parse_params(r#"{"rest_speed_m_per_s": 0.03}"#, "new.json").expect("per second");
+        assert_eq!(p.upetrack.rest_speed_m_per_s, 0.03);
     }
 }

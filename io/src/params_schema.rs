@@ -358,13 +358,13 @@ pub const PARAMETERS: &[ParamInfo] = &[
         ParamKind::Bool,
     ),
     p(
-        "rest_speed",
+        "rest_speed_m_per_s",
         Upetrack,
         "rest speed",
-        "Below this motion of its known neighbours (mm per frame) a hidden run rests: alpha rises to 1 (Eq. 11); 0 keeps alpha",
-        number(0.0, 20.0, 0.1),
+        "Below this speed of its known neighbours (a move per frame at the sequence's frame rate) a hidden run rests: alpha rises to 1 (Eq. 11); 0 keeps alpha",
+        number(0.0, 600.0, 1.0),
     )
-    .in_mm(),
+    .in_unit("mm/s", 1000.0),
     p(
         "outlier_weight",
         Upetrack,

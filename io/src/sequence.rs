@@ -26,7 +26,7 @@ pub const MAX_OCCLUSIONS: usize = 10_000;
 /// Largest JSON file read, bytes.
 pub const MAX_JSON_BYTES: usize = 64 * 1024 * 1024;
 
-pub use upetrack::perception::camera::{DEFAULT_DEPTH_SCALE, DEFAULT_FPS};
+pub use upetrack::perception::camera::{DEFAULT_DEPTH_SCALE, DEFAULT_FPS, MAX_FPS};
 /// Colour folder names accepted, in order of preference.
 pub const COLOR_DIRS: [&str; 3] = ["color", "rgb", "image"];
 
@@ -454,7 +454,7 @@ fn rates<S: Source>(
         ));
     }
     let fps = config.fps.or(fps).unwrap_or(DEFAULT_FPS);
-    if !(fps.is_finite() && fps > 0.0 && fps <= 10_000.0) {
+    if !(fps.is_finite() && fps > 0.0 && fps <= MAX_FPS) {
         return Err(SequenceError::invalid(
             &dlo_path,
             format!("fps {fps} must be in (0, 10000]"),
@@ -653,16 +653,18 @@ impl<S: Source> Sequence<S> {
         self.ropes.first().map(|r| r.prior).unwrap_or_default()
     }
 
-    /// A tracker for this sequence: its camera, colour range and rope prior
-    /// (of the first rope, when `dlo.json` lists several).
+    /// A tracker for this sequence: its camera, frame rate, colour range
+    /// and rope prior (of the first rope, when `dlo.json` lists several).
     pub fn tracker(&self, params: Params) -> Result<Tracker, TrackerError> {
         let mut t = Tracker::new(params, self.camera, self.hsv)?;
         t.set_rope_prior(self.rope_prior())?;
+        t.set_frame_rate(self.fps)?;
         Ok(t)
     }
 
-    /// A tracker of every rope of this sequence, each with its colour
-    /// range and prior (one rope: [`Sequence::tracker`]'s, alone).
+    /// A tracker of every rope of this sequence at its frame rate, each
+    /// with its colour range and prior (one rope: [`Sequence::tracker`]'s,
+    /// alone).
     pub fn multi_tracker(&self, params: Params) -> Result<MultiTracker, TrackerError> {
         let trackers = self
             .ropes
@@ -671,6 +673,7 @@ impl<S: Source> Sequence<S> {
                 let mut t = Tracker::new(params, self.camera, r.hsv)?;
                 t.set_rope_prior(r.prior)?;
                 t.set_rope_hint(r.hint);
+                t.set_frame_rate(self.fps)?;
                 Ok(t)
             })
             .collect::<Result<Vec<_>, TrackerError>>()?;

@@ -76,7 +76,7 @@ impl SyntheticWriter {
         let hsv = s.hsv();
         let dlo = DloConfig {
             depth_scale: Some(SYNTHETIC_DEPTH_SCALE),
-            fps: Some(SYNTHETIC_FPS),
+            fps: Some(s.fps()),
             segmentation: Some(SegmentationConfig::of(&hsv)),
             occlusions: s
                 .occlusions

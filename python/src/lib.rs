@@ -223,10 +223,11 @@ impl StepResult {
 /// Tracks one rope in aligned colour and depth frames of one camera.
 ///
 /// `Tracker(intrinsics, params=None, algorithm=None, depth_scale=0.001,
-/// hsv=((90, 90, 30), (130, 255, 255)), occlusions=())`: `params` a dict of
-/// any subset of the parameters or a preset name; `algorithm` one of
-/// "upetrack", "cpd", "trackdlo", "cdcpd2"; `depth_scale` metres per depth
-/// unit; `hsv` the rope's colour range in OpenCV's convention and
+/// hsv=((90, 90, 30), (130, 255, 255)), occlusions=(), chroma_noise=0,
+/// fps=30.0)`: `params` a dict of any subset of the parameters or a preset
+/// name; `algorithm` one of "upetrack", "cpd", "trackdlo", "cdcpd2";
+/// `depth_scale` metres per depth unit; `fps` the camera's frames per
+/// second (speeds in the parameters become moves per frame with it); `hsv` the rope's colour range in OpenCV's convention and
 /// `chroma_noise` the colour noise its saturation test allows for (levels of
 /// chroma, 0 is OpenCV's `inRange`; docs/sequence-format.md); `occlusions`
 /// rectangles `(x, y, w, h)` blacked out on every frame.
@@ -240,7 +241,8 @@ struct Tracker {
 #[pymethods]
 impl Tracker {
     #[new]
-    #[pyo3(signature = (intrinsics, params=None, algorithm=None, depth_scale=0.001, hsv=None, occlusions=Vec::new(), chroma_noise=0))]
+    #[pyo3(signature = (intrinsics, params=None, algorithm=None, depth_scale=0.001, hsv=None, occlusions=Vec::new(), chroma_noise=0, fps=upetrack::perception::camera::DEFAULT_FPS))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         intrinsics: &Intrinsics,
         params: Option<&Bound<'_, PyAny>>,
@@ -249,6 +251,7 @@ impl Tracker {
         hsv: Option<HsvTuple>,
         occlusions: Vec<(i64, i64, i64, i64)>,
         chroma_noise: u8,
+        fps: f64,
     ) -> PyResult<Self> {
         let params = algorithm_of(algorithm, params_of(params)?)?;
         if !(depth_scale > 0.0 && depth_scale.is_finite()) {
@@ -263,8 +266,9 @@ impl Tracker {
             chroma_noise,
             ..bounds
         };
-        let inner =
+        let mut inner =
             upetrack::Tracker::new(params, intrinsics.camera(), hsv).map_err(tracker_error)?;
+        inner.set_frame_rate(fps).map_err(tracker_error)?;
         Ok(Self {
             inner,
             depth_scale,
@@ -537,7 +541,7 @@ impl Sequence {
         self.inner.ropes.iter().map(|r| r.name.clone()).collect()
     }
 
-    /// A tracker for this sequence (its camera, colour range and the rope
+    /// A tracker for this sequence (its camera, frame rate, colour range and the rope
     /// `dlo.json` describes), as the command builds it; with several ropes,
     /// of rope `rope` alone (its colour, prior and hint: the other ropes'
     /// pixels are not shared out, as `track` shares them).
@@ -557,6 +561,7 @@ impl Sequence {
                     .map_err(tracker_error)?;
                 t.set_rope_prior(r.prior).map_err(tracker_error)?;
                 t.set_rope_hint(r.hint);
+                t.set_frame_rate(self.inner.fps).map_err(tracker_error)?;
                 t
             }
             None => {

@@ -7,9 +7,6 @@ use upetrack::rng::SplitMix64;
 
 use crate::ease::smoothstep;
 
-/// Frames per second the camera's motion is timed in (the simulator's rate).
-const FPS: f64 = 30.0;
-
 /// Largest move of a camera on an arm, metres, and its largest turn, degrees.
 pub const ARM_SHIFT_M: (f64, f64) = (0.02, 0.08);
 /// Range of an arm's turn, degrees.
@@ -122,8 +119,10 @@ impl CameraPath {
         }
     }
 
-    /// The camera's shift (metres) and turn (radians) at frame `f`.
-    pub fn at(&self, f: usize) -> ([f64; 3], [f64; 3]) {
+    /// The camera's shift (metres) and turn (radians) at frame `f` (or
+    /// between frames) of a sequence at `fps` frames per second (a hand's
+    /// wobble is timed in seconds, an arm's move in frames of the sequence).
+    pub fn at(&self, f: f64, fps: f64) -> ([f64; 3], [f64; 3]) {
         match self {
             Self::Arm {
                 shift,
@@ -131,7 +130,7 @@ impl CameraPath {
                 start,
                 end,
             } => {
-                let x = smoothstep((f as f64 - *start as f64) / (end - start).max(1) as f64);
+                let x = smoothstep((f - *start as f64) / (end - start).max(1) as f64);
                 (shift.map(|s| s * x), turn.map(|t| t * x))
             }
             Self::Handheld {
@@ -140,7 +139,7 @@ impl CameraPath {
                 tremor,
                 tremor_turn,
             } => {
-                let t = f as f64 / FPS;
+                let t = f / fps;
                 let add = |a: [f64; 3], b: [f64; 3]| [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
                 (
                     add(drift.at(t), tremor.at(t)),

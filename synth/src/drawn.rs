@@ -39,7 +39,7 @@ fn to_rect(p: &Vec3, min: &Vec3, max: &Vec3) -> f64 {
 fn render_at(draw: &RandomScene, f: usize) -> RenderSettings {
     let mut r = draw.render();
     if let Some(path) = &draw.camera.motion {
-        (r.camera_shift, r.camera_turn) = path.at(f);
+        (r.camera_shift, r.camera_turn) = path.at(f as f64, draw.fps);
     }
     r
 }
@@ -52,13 +52,19 @@ fn scenario(mut draw: RandomScene) -> Scenario {
         lift_upper_strand(&mut rope);
     }
     for _ in 0..SETTLING_FRAMES {
-        rope.step(1.0 / 30.0);
+        rope.step(1.0 / crate::SIMULATED_FPS);
     }
+    // As many substeps a second at any frame rate: the same rope.
+    let per_second = rope.settings.substeps as f64 * crate::SIMULATED_FPS;
+    rope.settings.substeps = libm::round(per_second / draw.fps).max(1.0) as usize;
     let mut rng = SplitMix64::new(draw.seed ^ 0x0CC1_0DE5_0000_0002);
     let frames = draw.frames;
     let n = rope.x.len();
     let last = n - 1;
     let d = draw.rope.diameter_m;
+    // Durations drawn in frames at the default rate, in this draw's frames.
+    let rate = draw.fps / crate::SIMULATED_FPS;
+    let in_frames = |n: f64| libm::round(n * rate).max(1.0) as usize;
 
     // The rope's motion: the moved end, out along its own direction or across it.
     let m = draw.motion;
@@ -122,7 +128,7 @@ fn scenario(mut draw: RandomScene) -> Scenario {
             };
             let a = rng.range(0.0, core::f64::consts::TAU);
             let from = Vec3::new(libm::cos(a), libm::sin(a), 0.0) * BOX_ENTRY;
-            let frames = rng.range(5.0, 12.0) as usize;
+            let frames = in_frames(libm::floor(rng.range(5.0, 12.0)));
             draw.placed.occluder_boxes.push(corners(&shape));
             boxes.push(MovingBox {
                 first,
@@ -135,7 +141,7 @@ fn scenario(mut draw: RandomScene) -> Scenario {
             let z0 = d + rng.range(0.03, 0.10);
             let along_x = rng.uniform() < 0.5;
             let dir = if rng.uniform() < 0.5 { -1.0 } else { 1.0 };
-            let frames = rng.range(6.0, 12.0) as usize;
+            let frames = in_frames(libm::floor(rng.range(6.0, 12.0)));
             for shape in hand(mid, z0, along_x, dir, o.rgb) {
                 draw.placed.occluder_boxes.push(corners(&shape));
                 boxes.push(MovingBox {
@@ -152,7 +158,7 @@ fn scenario(mut draw: RandomScene) -> Scenario {
         OccluderKind::Gripper => {
             // It holds the moved end; a resting rope's end is held still.
             if pulls.is_empty() {
-                let start = (first + 12).min(frames.saturating_sub(2));
+                let start = (first + in_frames(12.0)).min(frames.saturating_sub(2));
                 pulls.push(Pull {
                     particle: moved,
                     start,
@@ -162,10 +168,11 @@ fn scenario(mut draw: RandomScene) -> Scenario {
                 });
             }
             let start = pulls[0].start;
-            draw.occluder.first_frame = start - start.min(GRIPPER_APPROACH_FRAMES);
+            let approach = in_frames(GRIPPER_APPROACH_FRAMES as f64);
+            draw.occluder.first_frame = start - start.min(approach);
             draw.occluder.last_frame = frames - 1;
             let r = draw.rope.diameter_m * 0.5;
-            boxes.extend(gripper_holding(r, Some(o.rgb), start, frames));
+            boxes.extend(gripper_holding(r, Some(o.rgb), start, frames, approach));
         }
     }
 
@@ -282,5 +289,11 @@ impl Scenario {
     /// [`Scenario::draw`].
     pub fn random(seed: u64, frames: usize) -> Self {
         scenario(RandomScene::draw(seed, frames))
+    }
+
+    /// [`Scenario::random`] filmed at `fps` frames per second
+    /// ([`RandomScene::draw_at`]).
+    pub fn random_at(seed: u64, frames: usize, fps: f64) -> Self {
+        scenario(RandomScene::draw_at(seed, frames, fps))
     }
 }

@@ -33,3 +33,11 @@ pub use variant::Variant;
 
 /// Most frames one scenario records.
 pub const MAX_FRAMES: usize = 100_000;
+
+/// Frames per second of a simulated sequence unless a drawn scene asks for
+/// another rate ([`RandomScene::fps`]): the D435i's default.
+pub const SIMULATED_FPS: f64 = 30.0;
+
+/// Slowest and fastest frame rates a drawn scene may be simulated at (the
+/// D435i's colour stream runs at 6 to 90 frames per second).
+pub const FPS_RANGE: (f64, f64) = (6.0, 90.0);

@@ -301,15 +301,17 @@ pub struct Scenario {
 pub(crate) const GRIPPER_APPROACH_FRAMES: usize = 15;
 
 /// A gripper's three boxes ([`gripper`]) coming down onto the end that
-/// pull 0 moves from frame `start` on, and holding it to the last frame;
-/// `r` the rope's radius, `color` `None` for the occluders' colour.
+/// pull 0 moves from frame `start` on, and holding it to the last frame,
+/// in at most `approach` frames; `r` the rope's radius, `color` `None` for
+/// the occluders' colour.
 pub(crate) fn gripper_holding(
     r: f64,
     color: Option<[f64; 3]>,
     start: usize,
     frames: usize,
+    approach: usize,
 ) -> impl Iterator<Item = MovingBox> {
-    let approach = start.min(GRIPPER_APPROACH_FRAMES);
+    let approach = start.min(approach);
     gripper(r, color).into_iter().map(move |shape| MovingBox {
         first: start - approach,
         last: frames - 1,
@@ -337,6 +339,12 @@ pub(crate) fn still(shape: OccluderBox, frames: usize) -> MovingBox {
 }
 
 impl Scenario {
+    /// Frames per second it is filmed at: a drawn scene's
+    /// ([`RandomScene::fps`]), else [`crate::SIMULATED_FPS`].
+    pub fn fps(&self) -> f64 {
+        self.draw.as_ref().map_or(crate::SIMULATED_FPS, |d| d.fps)
+    }
+
     /// Sets up `kind` with `frames` frames (at least 1) and a seed; the rope
     /// is settled before recording starts.
     pub fn new(kind: ScenarioKind, frames: usize, seed: u64, render: RenderSettings) -> Self {
@@ -477,6 +485,7 @@ impl Scenario {
                     None,
                     start,
                     frames,
+                    GRIPPER_APPROACH_FRAMES,
                 ));
             }
             ScenarioKind::BoxOverEnd | ScenarioKind::BoxOverMiddle => {
@@ -684,7 +693,7 @@ impl Scenario {
         let f = self.next;
         self.next += 1;
         if let Some(path) = &self.camera_path {
-            (self.render.camera_shift, self.render.camera_turn) = path.at(f);
+            (self.render.camera_shift, self.render.camera_turn) = path.at(f as f64, self.fps());
         }
         let mut targets: Vec<Vec3> = self.pulls.iter().map(|(_, origin)| *origin).collect();
         if f > 0 {
@@ -694,7 +703,7 @@ impl Scenario {
                     self.rope.grasp(p.particle, target);
                 }
             }
-            self.rope.step(1.0 / 30.0);
+            self.rope.step(1.0 / self.fps());
         }
         let boxes: Vec<OccluderBox> = self
             .boxes

@@ -101,10 +101,13 @@ fn now_ms() -> f64 {
 }
 
 /// Options of a tracker: `{ camera: {width, height, fx, fy, cx, cy},
-/// params?, hsv?, rope?, ropes? }`.
+/// fps?, params?, hsv?, rope?, ropes? }`.
 #[derive(Deserialize)]
 struct TrackerOptions {
     camera: CameraIntrinsics,
+    /// Frames per second (`dlo.json`'s `fps`; 30 when absent).
+    #[serde(default)]
+    fps: Option<f64>,
     #[serde(default)]
     params: Option<Params>,
     #[serde(default)]
@@ -254,8 +257,9 @@ fn status_of(out: &FrameOutput) -> (&'static str, Option<String>) {
 
 #[wasm_bindgen]
 impl WasmTracker {
-    /// A tracker from `{ camera, params?, hsv?, rope?, ropes? }`; missing
-    /// parameters take their defaults. `ropes` (`[{name?, hsv?, rope?}]`,
+    /// A tracker from `{ camera, fps?, params?, hsv?, rope?, ropes? }`;
+    /// missing parameters take their defaults, a missing `fps` 30 frames
+    /// per second. `ropes` (`[{name?, hsv?, rope?}]`,
     /// 1 to 8) tracks several ropes at once.
     #[wasm_bindgen(constructor)]
     pub fn new(options: JsValue) -> Result<WasmTracker, JsError> {
@@ -273,6 +277,9 @@ impl WasmTracker {
         for (k, spec) in specs.iter().enumerate() {
             let hsv = spec.hsv.or(o.hsv).unwrap_or_default();
             let mut tracker = Tracker::new(params, o.camera, hsv).map_err(js_err)?;
+            if let Some(fps) = o.fps {
+                tracker.set_frame_rate(fps).map_err(js_err)?;
+            }
             if let Some(rope) = spec.rope.or(o.rope) {
                 tracker.set_rope_prior(rope.prior()).map_err(js_err)?;
             }

@@ -11,6 +11,8 @@ pub const MAX_IMAGE_SIDE: u32 = 8192;
 pub const DEFAULT_DEPTH_SCALE: f64 = 0.001;
 /// Frames per second when nothing says otherwise (a D435i's default rate).
 pub const DEFAULT_FPS: f64 = 30.0;
+/// Fastest frame rate accepted, frames per second.
+pub const MAX_FPS: f64 = 10_000.0;
 /// Depth noise of the D435i's stereo matching, as a disparity error in pixels.
 pub const SUBPIXEL_DISPARITY: f64 = 0.08;
 /// The D435i's stereo baseline, metres.

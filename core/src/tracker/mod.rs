@@ -9,7 +9,7 @@ use crate::baselines::trackdlo::TrackDloReport;
 use crate::math::{self, Vec2, Vec3};
 use crate::motion::RigidMotion;
 use crate::params::{Params, ParamsError};
-use crate::perception::camera::{CameraError, CameraIntrinsics};
+use crate::perception::camera::{CameraError, CameraIntrinsics, DEFAULT_FPS, MAX_FPS};
 use crate::perception::ego_motion::CameraMotion;
 use crate::perception::evidence::Evidence;
 use crate::perception::frame::{Frame, FrameError};
@@ -96,6 +96,12 @@ pub enum TrackerError {
     CameraMismatch {
         /// Index of the rope.
         rope: usize,
+    },
+    /// A frame rate that is not a positive number of frames per second.
+    #[error("a frame rate of {fps} frames per second: it must be in (0, {max}]", max = MAX_FPS)]
+    FrameRate {
+        /// The rate given.
+        fps: f64,
     },
     /// A snapshot that no tracker could have taken.
     #[error("a snapshot the tracker cannot return to: {reason}")]
@@ -278,6 +284,8 @@ pub struct Tracker {
     hint: Option<Vec2>,
     /// The camera's own motion: the last background, told or estimated.
     following: CameraFollowing,
+    /// Seconds between frames (`1 / fps`).
+    frame_interval: f64,
 }
 
 impl Tracker {
@@ -306,7 +314,25 @@ impl Tracker {
             prior: RopePrior::default(),
             hint: None,
             following: CameraFollowing::default(),
+            frame_interval: 1.0 / DEFAULT_FPS,
         })
+    }
+
+    /// The camera's frame rate, frames per second (a sequence's `fps`;
+    /// [`DEFAULT_FPS`] until told): speeds in the parameters
+    /// (`rest_speed_m_per_s`) become moves per frame with it. Effective
+    /// next frame.
+    pub fn set_frame_rate(&mut self, fps: f64) -> Result<(), TrackerError> {
+        if !(fps.is_finite() && fps > 0.0 && fps <= MAX_FPS) {
+            return Err(TrackerError::FrameRate { fps });
+        }
+        self.frame_interval = 1.0 / fps;
+        Ok(())
+    }
+
+    /// The frame rate in force, frames per second.
+    pub fn frame_rate(&self) -> f64 {
+        1.0 / self.frame_interval
     }
 
     /// What the user knows of the rope (`dlo.json`'s `rope`): candidates
@@ -746,6 +772,7 @@ impl Tracker {
             camera,
             evidence: Some(self.evidence(camera, frame, obs)),
             rest_length: self.rest_length,
+            frame_interval: self.frame_interval,
         }
     }
 
@@ -982,6 +1009,19 @@ mod tests {
         t.set_params(p).expect("params");
         t.restore(snap).expect("its own snapshot");
         assert_eq!(t.nodes().len(), 12);
+    }
+
+    #[test]
+    fn a_frame_rate_that_is_no_positive_number_of_frames_per_second_is_refused() {
+        let (mut t, _) = tracking_a_line(Params::default());
+        assert_eq!(t.frame_rate(), DEFAULT_FPS);
+        for fps in [0.0, -30.0, f64::NAN, f64::INFINITY, 2.0 * MAX_FPS] {
+            let e = t.set_frame_rate(fps).expect_err("not a frame rate");
+            assert!(matches!(e, TrackerError::FrameRate { .. }), "{e}");
+        }
+        assert_eq!(t.frame_rate(), DEFAULT_FPS);
+        t.set_frame_rate(60.0).expect("60 fps");
+        assert!((t.frame_rate() - 60.0).abs() < 1e-9);
     }
 
     #[test]

@@ -175,6 +175,7 @@ mod tests {
             camera: &CameraIntrinsics::D435I_640X480,
             evidence: None,
             rest_length: None,
+            frame_interval: 1.0 / crate::perception::camera::DEFAULT_FPS,
             not_rope: &[],
         };
         let out = stepper.step(&input, &Params::default());

@@ -35,10 +35,14 @@ use crate::math::Vec3;
 use crate::step::{Algorithm, StepInput, StepOutput, TrackingStep};
 use crate::validation::{below_one, check, unit, ParamsError};
 
-/// Default [`UpeTrackParams::rest_speed`]: 2 mm per frame (6 cm/s at the
-/// D435i's 30 frames/s), about twice the frame-to-frame jitter across the
-/// rope of a visible node of a resting rope (0.9 mm median on static-s).
-pub const DEFAULT_REST_SPEED: f64 = 0.002;
+/// Default [`UpeTrackParams::rest_speed_m_per_s`]: 6 cm/s, 2 mm a frame at
+/// the D435i's 30 frames/s, about twice the frame-to-frame jitter across
+/// the rope of a visible node of a resting rope (0.9 mm median on
+/// static-s).
+pub const DEFAULT_REST_SPEED: f64 = 0.06;
+/// Largest [`UpeTrackParams::rest_speed_m_per_s`] accepted, metres per
+/// second (well beyond any rope a camera follows).
+pub const MAX_REST_SPEED: f64 = 30.0;
 
 /// UPETrack's parameters for the registration and the occlusion estimate
 /// (the visibility test and `M` are shared by every algorithm and sit in
@@ -86,11 +90,14 @@ pub struct UpeTrackParams {
     /// paper's polyline.
     pub smooth_resampling: bool,
     /// Speed of a hidden node's known neighbours below which its run is
-    /// taken to rest, metres per frame: below it `alpha` of Eq. 11 rises
-    /// from `displacement_weight` to 1 at rest, with the square of the
-    /// speed (`occlusion::resting_weight`). Default
-    /// [`DEFAULT_REST_SPEED`]; 0 is the paper's fixed `alpha`.
-    pub rest_speed: f64,
+    /// taken to rest, metres per second (a move per frame at the tracker's
+    /// frame rate, `StepInput::frame_interval`): below it `alpha` of
+    /// Eq. 11 rises from `displacement_weight` to 1 at rest, with the
+    /// square of the speed (`occlusion::resting_weight`). Default
+    /// [`DEFAULT_REST_SPEED`]; 0 is the paper's fixed `alpha`. (Parameter
+    /// files before this field gave `rest_speed` in metres per frame; it
+    /// is refused with a message rather than read in the new unit.)
+    pub rest_speed_m_per_s: f64,
     /// Keep only the across-rope part of EM's move of a visible node next
     /// to a hidden run (an anchor of Eq. 6-11): at an occlusion's edge the
     /// cloud lies on one side of the node only, and the GMM pulls it away
@@ -176,7 +183,7 @@ impl Default for UpeTrackParams {
             free_space: true,
             across_rope_displacement: true,
             smooth_resampling: true,
-            rest_speed: DEFAULT_REST_SPEED,
+            rest_speed_m_per_s: DEFAULT_REST_SPEED,
             anchor_across_only: true,
             hidden_nodes_absorb: true,
             extend_short_ends: true,
@@ -219,12 +226,12 @@ impl UpeTrackParams {
             (1..=MAX_EM_ITERATIONS).contains(&it),
             "an integer in 1..=1000",
         )?;
-        let r = self.rest_speed;
+        let r = self.rest_speed_m_per_s;
         check(
-            "rest_speed",
+            "rest_speed_m_per_s",
             r,
-            (0.0..=1.0).contains(&r),
-            "in [0, 1] metres per frame",
+            (0.0..=MAX_REST_SPEED).contains(&r),
+            "in [0, 30] metres per second",
         )?;
         let s = self.min_variance;
         check(
@@ -235,8 +242,8 @@ impl UpeTrackParams {
         )
     }
 
-    /// The UPE coefficients.
-    pub fn upe(&self) -> UpeCoefficients {
+    /// The UPE coefficients for frames `frame_interval` seconds apart.
+    pub fn upe(&self, frame_interval: f64) -> UpeCoefficients {
         UpeCoefficients {
             displacement_decay: self.displacement_decay,
             curvature_retention: self.curvature_retention,
@@ -245,7 +252,7 @@ impl UpeTrackParams {
             end_displacement_weight: self.end_displacement_weight,
             hidden_motion: self.hidden_motion,
             across_rope_displacement: self.across_rope_displacement,
-            rest_speed: self.rest_speed,
+            rest_move: self.rest_speed_m_per_s * frame_interval,
         }
     }
 
@@ -365,8 +372,9 @@ fn run_step(
         }
         em
     };
+    let coefficients = settings.upe(input.frame_interval);
     let (upe, sweeps) =
-        estimate_hidden_with_sweeps(&mut nodes, input.visible, &previous, &settings.upe());
+        estimate_hidden_with_sweeps(&mut nodes, input.visible, &previous, &coefficients);
     if let Some(t) = trace.as_deref_mut() {
         t.sweeps = sweeps;
         t.end_runs = occlusion::hidden_end_runs(input.visible);
@@ -499,6 +507,44 @@ mod tests {
     use crate::perception::camera::CameraIntrinsics;
     use alloc::vec::Vec;
 
+    /// The rest speed is a speed: the same move of the known nodes in one
+    /// frame is a resting rope's jitter at 15 frames/s (3 cm/s) and a
+    /// moving rope at 60 (12 cm/s), so Eq. 11's `alpha` rises towards 1 at
+    /// the first rate only.
+    #[test]
+    fn the_rest_speed_is_per_second_whatever_the_frame_rate() {
+        let params = UpeTrackParams {
+            hidden_motion: HiddenMotion::Paper,
+            ..UpeTrackParams::default()
+        };
+        assert!((params.upe(1.0 / 60.0).rest_move - DEFAULT_REST_SPEED / 60.0).abs() < 1e-15);
+        let prev: Vec<Vec3> = (0..7)
+            .map(|i| {
+                let t = i as f64 * 0.3;
+                Vec3::new(libm::cos(t), libm::sin(t), 0.0) * 0.2
+            })
+            .collect();
+        let known = [true, true, true, true, true, true, false];
+        let step = Vec3::new(0.0, 0.0, 0.002);
+        let moved: Vec<Vec3> = prev.iter().map(|p| p + step).collect();
+        let hidden_at = |c: &UpeCoefficients| {
+            let mut nodes = moved.clone();
+            occlusion::estimate_hidden(&mut nodes, &known, &prev, c);
+            nodes[6]
+        };
+        let fixed_alpha = UpeCoefficients {
+            rest_move: 0.0,
+            ..params.upe(1.0 / 60.0)
+        };
+        assert_eq!(hidden_at(&params.upe(1.0 / 60.0)), hidden_at(&fixed_alpha));
+        // At 15 frames/s the move is half the rest move: `1 - alpha` is a
+        // quarter of the fixed alpha's (Eq. 11 is linear in `alpha`).
+        let kept_shape = prev[6] + step;
+        let off = |c: &UpeCoefficients| (hidden_at(c) - kept_shape).norm();
+        let share = off(&params.upe(1.0 / 15.0)) / off(&fixed_alpha);
+        assert!((share - 0.25).abs() < 1e-9, "{share}");
+    }
+
     #[test]
     fn the_step_caps_a_hidden_end_at_the_rest_length_only_when_asked() {
         // Ten nodes 1 cm apart; the cloud covers nodes 0-6, the tail 7-9 is
@@ -519,6 +565,7 @@ mod tests {
             camera: &camera,
             evidence: None,
             rest_length,
+            frame_interval: 1.0 / crate::perception::camera::DEFAULT_FPS,
             not_rope: &[],
         };
         let length = |n: &[Vec3]| n.windows(2).map(|w| (w[1] - w[0]).norm()).sum::<f64>();
@@ -594,6 +641,7 @@ mod tests {
             camera: &camera,
             evidence: Some(evidence),
             rest_length: None,
+            frame_interval: 1.0 / crate::perception::camera::DEFAULT_FPS,
             not_rope: &[],
         };
         let p = UpeTrackParams::default();
@@ -657,6 +705,7 @@ mod tests {
             camera: &table.camera,
             evidence: Some(evidence),
             rest_length: Some(9.0 * spacing),
+            frame_interval: 1.0 / crate::perception::camera::DEFAULT_FPS,
             not_rope: &[],
         };
         UpeTrackStep.step(&input, p).report.extension

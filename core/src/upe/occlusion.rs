@@ -33,11 +33,12 @@ pub struct UpeCoefficients {
     /// `D_k` of Eq. 6 without its component along the rope (this project's
     /// decision; false gives the paper's).
     pub across_rope_displacement: bool,
-    /// Speed of the known neighbours below which a hidden node counts as
-    /// resting, metres per frame (this project's decision; 0, the paper's
-    /// rule, turns it off): `alpha` rises from its value towards 1 as the
-    /// mean displacement of Eq. 6 falls from this speed to 0.
-    pub rest_speed: f64,
+    /// Move of the known neighbours in one frame below which a hidden node
+    /// counts as resting, metres (the rest speed over one frame interval;
+    /// this project's decision; 0, the paper's rule, turns it off):
+    /// `alpha` rises from its value towards 1 as the mean displacement of
+    /// Eq. 6 falls from this move to 0.
+    pub rest_move: f64,
 }
 
 /// The displacement estimate `y'` of a hidden node (Eq. 11's first term).
@@ -111,7 +112,7 @@ fn estimate_node_with(
     let alpha = resting_weight(
         c.displacement_weight,
         math::norm(&mean_displacement),
-        c.rest_speed,
+        c.rest_move,
     );
 
     let d = math::norm(&(prev[m] - prev[n1]));
@@ -129,16 +130,16 @@ fn estimate_node_with(
     y_disp * alpha + y_geom * (1.0 - alpha)
 }
 
-/// `alpha` of Eq. 11 for a node whose known neighbours moved `speed`
-/// (metres per frame): `alpha` itself at `rest_speed` and above, and
-/// `alpha + (1 - alpha)(1 - (speed / rest_speed)^2)` below, which is 1 (the
+/// `alpha` of Eq. 11 for a node whose known neighbours moved `step` in
+/// one frame (metres): `alpha` itself at `rest_move` and above, and
+/// `alpha + (1 - alpha)(1 - (step / rest_move)^2)` below, which is 1 (the
 /// displacement term alone) at rest. The square keeps `alpha` near 1 over
 /// a resting rope's jitter. A rope that does not move keeps its shape;
 /// Eq. 8-10's pull towards a straighter continuation is what a moving rope
 /// does.
-pub fn resting_weight(alpha: f64, speed: f64, rest_speed: f64) -> f64 {
-    if rest_speed > 0.0 && speed.is_finite() && speed < rest_speed {
-        let r = speed / rest_speed;
+pub fn resting_weight(alpha: f64, step: f64, rest_move: f64) -> f64 {
+    if rest_move > 0.0 && step.is_finite() && step < rest_move {
+        let r = step / rest_move;
         alpha + (1.0 - alpha) * (1.0 - r * r)
     } else {
         alpha
@@ -365,7 +366,7 @@ mod tests {
         end_displacement_weight: 0.75,
         hidden_motion: HiddenMotion::Paper,
         across_rope_displacement: false,
-        rest_speed: 0.0,
+        rest_move: 0.0,
     };
 
     #[test]
@@ -415,7 +416,7 @@ mod tests {
             displacement_decay: 0.8,
             hidden_motion: HiddenMotion::Paper,
             across_rope_displacement: false,
-            rest_speed: 0.0,
+            rest_move: 0.0,
         };
         let prev = vec![
             Vec3::new(-1.0, 0.0, 0.0),
@@ -759,7 +760,7 @@ mod tests {
                 ][case % 3],
                 // Every pairing of motion, rest speed and across-rope
                 // displacement (18) over the 500 cases.
-                rest_speed: [0.0, 1e-3, 1.0][(case / 3) % 3],
+                rest_move: [0.0, 1e-3, 1.0][(case / 3) % 3],
                 across_rope_displacement: (case / 9) % 2 == 0,
             };
             estimate_hidden(&mut nodes, &known, &prev, &c);
@@ -786,7 +787,7 @@ mod tests {
         let c = |across| UpeCoefficients {
             displacement_weight: 1.0,
             across_rope_displacement: across,
-            rest_speed: 0.0,
+            rest_move: 0.0,
             ..PAPER
         };
         let slide = Vec3::new(0.005, 0.0, 0.0);
@@ -844,7 +845,7 @@ mod tests {
         // A lone hidden end node: one sweep, with `alpha` (not `alpha_end`).
         let known = [true, true, true, true, true, true, false];
         let resting = UpeCoefficients {
-            rest_speed: 0.002,
+            rest_move: 0.002,
             ..PAPER
         };
         let mut kept = prev.clone();

@@ -76,6 +76,7 @@ class Tracker:
         hsv: Optional[_Hsv] = None,
         occlusions: Seq[_Rect] = ...,
         chroma_noise: int = 0,
+        fps: float = 30.0,
     ) -> "Tracker": ...
     def step(
         self,

@@ -294,6 +294,15 @@ pub struct RandomScene {
     pub seed: u64,
     /// Frames.
     pub frames: usize,
+    /// Frames per second ([`crate::SIMULATED_FPS`] unless asked otherwise,
+    /// [`RandomScene::draw_at`]): the simulator steps `1 / fps` seconds a
+    /// frame and a hand's wobble is timed in seconds, while every event is
+    /// drawn as a share of the sequence, so the same seed at twice the rate
+    /// over twice the frames is the same scene filmed twice as often.
+    /// Written only when not the default, so that earlier draws keep their
+    /// text.
+    #[serde(default = "simulated_fps", skip_serializing_if = "is_simulated_fps")]
+    pub fps: f64,
     /// The camera.
     pub camera: CameraDraw,
     /// The rope.
@@ -312,6 +321,16 @@ pub struct RandomScene {
     pub occluder: OccluderDraw,
     /// What the settled rope decided ([`Scenario::random`](crate::Scenario::random) fills it).
     pub placed: Placed,
+}
+
+/// [`crate::SIMULATED_FPS`], for serde.
+fn simulated_fps() -> f64 {
+    crate::SIMULATED_FPS
+}
+
+/// Whether `fps` is the default (serde leaves it out then).
+fn is_simulated_fps(fps: &f64) -> bool {
+    *fps == crate::SIMULATED_FPS
 }
 
 /// Picks an index by weights.
@@ -489,7 +508,21 @@ impl RandomScene {
     /// Draws a scene of `frames` frames (at least 1) from `seed`. Pure
     /// parameters: the same seed gives the same scene on every platform.
     pub fn draw(seed: u64, frames: usize) -> Self {
+        Self::draw_at(seed, frames, crate::SIMULATED_FPS)
+    }
+
+    /// [`RandomScene::draw`] filmed at `fps` frames per second (within
+    /// [`crate::FPS_RANGE`]; the default rate for a value that is not a
+    /// number). Its events stay at the same shares of the sequence: give it
+    /// `frames` in proportion to keep their times in seconds.
+    pub fn draw_at(seed: u64, frames: usize, fps: f64) -> Self {
         let frames = frames.clamp(1, crate::MAX_FRAMES);
+        let (lo, hi) = crate::FPS_RANGE;
+        let fps = if fps.is_finite() {
+            fps.clamp(lo, hi)
+        } else {
+            crate::SIMULATED_FPS
+        };
         let mut rng = SplitMix64::new(seed ^ 0x5CE7_E5EE_D000_0001);
         let at = |x: f64| ((frames as f64 * x) as usize).min(frames - 1);
         let hd = rng.uniform() < HD_SHARE;
@@ -578,6 +611,7 @@ impl RandomScene {
         let mut scene = Self {
             seed,
             frames,
+            fps,
             camera: CameraDraw {
                 width: intrinsics.width,
                 height: intrinsics.height,
@@ -705,7 +739,7 @@ impl RandomScene {
             ..RenderSettings::default()
         };
         if let Some(path) = &self.camera.motion {
-            (render.camera_shift, render.camera_turn) = path.at(0);
+            (render.camera_shift, render.camera_turn) = path.at(0.0, self.fps);
         }
         render
     }
@@ -776,7 +810,12 @@ impl RandomScene {
                 points.push(points[end] + dir * self.motion.distance_m);
             }
         }
-        let poses: Vec<usize> = (0..self.frames).step_by(3).collect();
+        // Poses every tenth of a second (every third frame at the default rate).
+        let rate = self.fps / crate::SIMULATED_FPS;
+        let poses: Vec<f64> = (0..)
+            .map(|k| (3 * k) as f64 * rate)
+            .take_while(|&f| f < self.frames as f64)
+            .collect();
         let mut distance = drawn;
         for _ in 0..60 {
             let mut render = RenderSettings {
@@ -792,7 +831,7 @@ impl RandomScene {
             );
             let fits = poses.iter().all(|&f| {
                 if let Some(path) = &self.camera.motion {
-                    (render.camera_shift, render.camera_turn) = path.at(f);
+                    (render.camera_shift, render.camera_turn) = path.at(f, self.fps);
                 }
                 points.iter().all(|p| {
                     cam.project(&render.world_to_camera(p)).is_some_and(|q| {
@@ -869,6 +908,57 @@ mod tests {
         assert_eq!(a.rope.x, b.rope.x);
         assert_eq!(a.occlusions, b.occlusions);
         assert!(a.draw.is_some() && a.name == "random-7");
+    }
+
+    /// The same seed filmed at half the rate over half the frames is the
+    /// same scene: camera and rope where they were at the same second,
+    /// within what they move in a frame of the slower rate (events start on
+    /// whole frames) and 1.5 cm (a pulled end follows its path in straight
+    /// pieces a frame long, coarser at the slower rate, so a fast pull
+    /// takes up the slack at slightly other moments: 10 mm on seed 1002).
+    /// Fails when the camera's fit or a hand's wobble ignores the rate (the
+    /// camera 34 cm off on seed 1003), or the rope's substeps (12 mm).
+    #[test]
+    fn a_scene_filmed_at_another_rate_is_the_same_scene_at_the_same_seconds() {
+        const SAME_SCENE_MARGIN_M: f64 = 0.015;
+        // Arm, hand with a pull along the axis, a fast pull.
+        for seed in [1013, 1003, 1002] {
+            let mut fast = Scenario::random(seed, 48);
+            let mut slow = Scenario::random_at(seed, 24, 15.0);
+            assert_eq!((fast.fps(), slow.fps()), (30.0, 15.0));
+            let (a, b) = (fast.draw.clone(), slow.draw.clone());
+            assert_eq!(
+                a.map(|d| d.camera.distance_m),
+                b.map(|d| d.camera.distance_m)
+            );
+            // The camera's centre first, then the rope's centre line.
+            let seen = |f: crate::scenario::SynthFrame| {
+                let mut at = alloc::vec![f.camera_pose.centre];
+                at.extend(f.groundtruth);
+                at
+            };
+            let slow: Vec<Vec<Vec3>> = (0..24)
+                .filter_map(|_| slow.next_frame())
+                .map(seen)
+                .collect();
+            for (k, b) in slow.iter().enumerate() {
+                let a = seen(fast.next_frame().expect("frame"));
+                fast.next_frame();
+                let (before, after) = (&slow[k.saturating_sub(1)], &slow[(k + 1).min(23)]);
+                assert_eq!(a.len(), b.len(), "seed {seed}");
+                for (i, (p, q)) in a.iter().zip(b).enumerate() {
+                    let frame_move = (before[i] - q).norm().max((after[i] - q).norm());
+                    let off = (p - q).norm();
+                    assert!(
+                        off <= frame_move + SAME_SCENE_MARGIN_M,
+                        "seed {seed}, second {:.2}, point {i}: {:.1} mm off, {:.1} mm a frame",
+                        k as f64 / 15.0,
+                        off * 1000.0,
+                        frame_move * 1000.0
+                    );
+                }
+            }
+        }
     }
 
     #[test]
@@ -1000,7 +1090,7 @@ mod tests {
                 );
             }
             if let Some(path) = s.draw.as_ref().and_then(|d| d.camera.motion) {
-                assert_eq!(path.at(0), ([0.0; 3], [0.0; 3]), "seed {seed}");
+                assert_eq!(path.at(0.0, 30.0), ([0.0; 3], [0.0; 3]), "seed {seed}");
             }
         }
     }
@@ -1015,7 +1105,7 @@ mod tests {
         else {
             panic!("an arm");
         };
-        assert_eq!(path.at(end), (shift, turn));
+        assert_eq!(path.at(end as f64, 30.0), (shift, turn));
         let moved = libm::sqrt(shift.iter().map(|x| x * x).sum::<f64>());
         assert!(
             moved > 0.5 * crate::camera_path::ARM_SHIFT_M.0
