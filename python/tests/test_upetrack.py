@@ -152,6 +152,11 @@ def test_bad_parameters_name_the_field():
         upetrack.Tracker(intr, hsv=((200, 0, 0), (10, 255, 255)))
     with pytest.raises(upetrack.TrackerError):
         upetrack.Intrinsics(640, 480, 0.0, 615.0, 320.0, 240.0)
+    with pytest.raises(ValueError, match="rest_speed_m_per_s"):
+        upetrack.Tracker(intr, params={"rest_speed": 0.002})
+    with pytest.raises(upetrack.TrackerError, match="frame rate"):
+        upetrack.Tracker(intr, fps=0.0)
+    assert upetrack.Tracker(intr, fps=60.0) is not None
     assert upetrack.Tracker(intr, params="paper", algorithm="cpd") is not None
 
 

@@ -40,6 +40,13 @@ use crate::validation::{below_one, check, unit, ParamsError};
 /// the rope of a visible node of a resting rope (0.9 mm median on
 /// static-s).
 pub const DEFAULT_REST_SPEED: f64 = 0.06;
+/// Shortest time over which the rest speed is judged, seconds (one frame
+/// at the D435i's default 30 frames/s): at a faster rate a frame's move is
+/// mostly the images' jitter, which does not shrink with the interval, so
+/// the move a resting rope may show in one frame stays the rest speed's
+/// over this time. Chosen on the tuning range filmed at 60 frames/s
+/// (`docs/algorithm-notes.md`).
+pub const MIN_REST_INTERVAL_S: f64 = 1.0 / 30.0;
 /// Largest [`UpeTrackParams::rest_speed_m_per_s`] accepted, metres per
 /// second (well beyond any rope a camera follows).
 pub const MAX_REST_SPEED: f64 = 30.0;
@@ -91,7 +98,8 @@ pub struct UpeTrackParams {
     pub smooth_resampling: bool,
     /// Speed of a hidden node's known neighbours below which its run is
     /// taken to rest, metres per second (a move per frame at the tracker's
-    /// frame rate, `StepInput::frame_interval`): below it `alpha` of
+    /// frame rate, `StepInput::frame_interval`, judged over at least
+    /// [`MIN_REST_INTERVAL_S`]): below it `alpha` of
     /// Eq. 11 rises from `displacement_weight` to 1 at rest, with the
     /// square of the speed (`occlusion::resting_weight`). Default
     /// [`DEFAULT_REST_SPEED`]; 0 is the paper's fixed `alpha`. (Parameter
@@ -252,7 +260,7 @@ impl UpeTrackParams {
             end_displacement_weight: self.end_displacement_weight,
             hidden_motion: self.hidden_motion,
             across_rope_displacement: self.across_rope_displacement,
-            rest_move: self.rest_speed_m_per_s * frame_interval,
+            rest_move: self.rest_speed_m_per_s * frame_interval.max(MIN_REST_INTERVAL_S),
         }
     }
 
@@ -509,15 +517,20 @@ mod tests {
 
     /// The rest speed is a speed: the same move of the known nodes in one
     /// frame is a resting rope's jitter at 15 frames/s (3 cm/s) and a
-    /// moving rope at 60 (12 cm/s), so Eq. 11's `alpha` rises towards 1 at
-    /// the first rate only.
+    /// moving rope at 30 (6 cm/s), so Eq. 11's `alpha` rises towards 1 at
+    /// the first rate only; at 60 the move a frame may show is 30's (the
+    /// images' jitter does not shrink with the interval).
     #[test]
     fn the_rest_speed_is_per_second_whatever_the_frame_rate() {
         let params = UpeTrackParams {
             hidden_motion: HiddenMotion::Paper,
             ..UpeTrackParams::default()
         };
-        assert!((params.upe(1.0 / 60.0).rest_move - DEFAULT_REST_SPEED / 60.0).abs() < 1e-15);
+        assert_eq!(
+            params.upe(1.0 / 60.0).rest_move,
+            params.upe(1.0 / 30.0).rest_move
+        );
+        assert!((params.upe(1.0 / 15.0).rest_move - DEFAULT_REST_SPEED / 15.0).abs() < 1e-15);
         let prev: Vec<Vec3> = (0..7)
             .map(|i| {
                 let t = i as f64 * 0.3;
@@ -534,9 +547,9 @@ mod tests {
         };
         let fixed_alpha = UpeCoefficients {
             rest_move: 0.0,
-            ..params.upe(1.0 / 60.0)
+            ..params.upe(1.0 / 30.0)
         };
-        assert_eq!(hidden_at(&params.upe(1.0 / 60.0)), hidden_at(&fixed_alpha));
+        assert_eq!(hidden_at(&params.upe(1.0 / 30.0)), hidden_at(&fixed_alpha));
         // At 15 frames/s the move is half the rest move: `1 - alpha` is a
         // quarter of the fixed alpha's (Eq. 11 is linear in `alpha`).
         let kept_shape = prev[6] + step;
