@@ -917,7 +917,7 @@ mod tests {
     /// pieces a frame long, coarser at the slower rate, so a fast pull
     /// takes up the slack at slightly other moments: 10 mm on seed 1002).
     /// Fails when the camera's fit or a hand's wobble ignores the rate (the
-    /// camera 34 cm off on seed 1003), or the rope's substeps (12 mm).
+    /// camera 34 cm off on seed 1003).
     #[test]
     fn a_scene_filmed_at_another_rate_is_the_same_scene_at_the_same_seconds() {
         const SAME_SCENE_MARGIN_M: f64 = 0.015;
