@@ -18,7 +18,11 @@ fuzz_target!(|data: &[u8]| {
         .chunks_exact(4)
         .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]) as f64)
         .collect();
-    let points: Vec<Vec3> = values.chunks_exact(3).take(m + 300).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
+    let points: Vec<Vec3> = values
+        .chunks_exact(3)
+        .take(m + 300)
+        .map(|c| Vec3::new(c[0], c[1], c[2]))
+        .collect();
     if points.len() < m || !points.iter().all(|p| p.iter().all(|c| c.is_finite())) {
         return;
     }
@@ -41,6 +45,7 @@ fuzz_target!(|data: &[u8]| {
             camera: &camera,
             evidence: None,
             rest_length: None,
+            frame_interval: 1.0 / upetrack::perception::camera::DEFAULT_FPS,
             not_rope: &[],
         },
         &params,

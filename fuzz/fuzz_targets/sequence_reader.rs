@@ -6,7 +6,13 @@
 use libfuzzer_sys::fuzz_target;
 use upetrack_io::{MemorySource, Sequence};
 
-const NAMES: [&str; 5] = ["camera_intrinsic.json", "dlo.json", "groundtruth.json", "color/000000.png", "depth/000000.png"];
+const NAMES: [&str; 5] = [
+    "camera_intrinsic.json",
+    "dlo.json",
+    "groundtruth.json",
+    "color/000000.png",
+    "depth/000000.png",
+];
 
 fuzz_target!(|data: &[u8]| {
     let mut source = MemorySource::new("fuzz");
@@ -26,7 +32,9 @@ fuzz_target!(|data: &[u8]| {
     for (name, part) in NAMES.iter().zip(parts) {
         source.insert(name, part.to_vec());
     }
-    let Ok(seq) = Sequence::open(source) else { return };
+    let Ok(seq) = Sequence::open(source) else {
+        return;
+    };
     let _ = seq.frame(0);
     let _ = upetrack_io::run::track_sequence(&seq, upetrack::Params::default(), &mut || 0.0);
 });
