@@ -241,7 +241,9 @@ struct Tracker {
 #[pymethods]
 impl Tracker {
     #[new]
-    #[pyo3(signature = (intrinsics, params=None, algorithm=None, depth_scale=0.001, hsv=None, occlusions=Vec::new(), chroma_noise=0, fps=upetrack::perception::camera::DEFAULT_FPS))]
+    #[pyo3(signature = (intrinsics, params=None, algorithm=None, depth_scale=0.001, hsv=None, occlusions=Vec::new(), chroma_noise=0, fps=30.0))]
+    // `fps`'s default is the core's `DEFAULT_FPS`, written out so the
+    // signature (and so the stub check) shows it.
     #[allow(clippy::too_many_arguments)]
     fn new(
         intrinsics: &Intrinsics,
