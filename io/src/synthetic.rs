@@ -11,8 +11,9 @@ use crate::sequence::{
 };
 use crate::write::{compact_json_bytes, encode_depth_png, encode_jpeg, json_bytes, JPEG_QUALITY};
 
-/// Frames per second of every synthetic sequence.
-pub const SYNTHETIC_FPS: f64 = 30.0;
+/// Frames per second of a synthetic sequence unless a drawn scene asks for
+/// another rate (the simulator's).
+pub const SYNTHETIC_FPS: f64 = upetrack_synth::SIMULATED_FPS;
 
 /// Depth units of every synthetic sequence, metres.
 pub const SYNTHETIC_DEPTH_SCALE: f64 = 0.001;

@@ -54,17 +54,16 @@ fn scenario(mut draw: RandomScene) -> Scenario {
     for _ in 0..SETTLING_FRAMES {
         rope.step(1.0 / crate::SIMULATED_FPS);
     }
-    // As many substeps a second at any frame rate: the same rope.
-    let per_second = rope.settings.substeps as f64 * crate::SIMULATED_FPS;
-    rope.settings.substeps = libm::round(per_second / draw.fps).max(1.0) as usize;
+    // Durations drawn in frames at the default rate, in this draw's frames;
+    // and as many substeps a second at any rate: the same rope.
+    let rate = draw.frames_per_default_frame();
+    let in_frames = |n: f64| libm::round(n * rate).max(1.0) as usize;
+    rope.settings.substeps = libm::round(rope.settings.substeps as f64 / rate).max(1.0) as usize;
     let mut rng = SplitMix64::new(draw.seed ^ 0x0CC1_0DE5_0000_0002);
     let frames = draw.frames;
     let n = rope.x.len();
     let last = n - 1;
     let d = draw.rope.diameter_m;
-    // Durations drawn in frames at the default rate, in this draw's frames.
-    let rate = draw.fps / crate::SIMULATED_FPS;
-    let in_frames = |n: f64| libm::round(n * rate).max(1.0) as usize;
 
     // The rope's motion: the moved end, out along its own direction or across it.
     let m = draw.motion;

@@ -402,7 +402,7 @@ impl Scenario {
             lift_upper_strand(&mut rope);
         }
         for _ in 0..SETTLING_FRAMES {
-            rope.step(1.0 / 30.0);
+            rope.step(1.0 / crate::SIMULATED_FPS);
         }
         let n = rope.x.len();
         let last = n - 1;

@@ -538,7 +538,7 @@ fn step_all(ropes: &mut [Rope]) {
                 radius: o.radius(),
             })
             .collect();
-        rope.step_among(1.0 / 30.0, &others);
+        rope.step_among(1.0 / crate::SIMULATED_FPS, &others);
     }
 }
 

@@ -831,17 +831,22 @@ mod tests {
         assert_eq!(resting_weight(0.75, f64::NAN, 0.002), 0.75);
     }
 
+    /// Seven nodes on a bend of radius 0.2 m, 0.3 rad apart.
+    fn bend_of_seven() -> Vec<Vec3> {
+        (0..7)
+            .map(|i| {
+                let t = i as f64 * 0.3;
+                Vec3::new(libm::cos(t), libm::sin(t), 0.0) * 0.2
+            })
+            .collect()
+    }
+
     /// A resting rope: the known nodes do not move, so the hidden node of a
     /// bend keeps its place with a rest speed, and Eq. 8-10 (b, a < 1) pull
     /// it in towards a straighter continuation without one.
     #[test]
     fn a_hidden_node_beside_resting_neighbours_keeps_its_place() {
-        let prev: Vec<Vec3> = (0..7)
-            .map(|i| {
-                let t = i as f64 * 0.3;
-                Vec3::new(libm::cos(t), libm::sin(t), 0.0) * 0.2
-            })
-            .collect();
+        let prev = bend_of_seven();
         // A lone hidden end node: one sweep, with `alpha` (not `alpha_end`).
         let known = [true, true, true, true, true, true, false];
         let resting = UpeCoefficients {
@@ -871,6 +876,47 @@ mod tests {
         estimate_hidden(&mut a, &known, &prev, &resting);
         estimate_hidden(&mut b, &known, &prev, &PAPER);
         assert_eq!(a, b);
+    }
+
+    /// The rest speed is a speed: the same move of the known nodes in one
+    /// frame is a resting rope's jitter at 15 frames/s (3 cm/s) and a
+    /// moving rope at 30 (6 cm/s), so Eq. 11's `alpha` rises towards 1 at
+    /// the first rate only; at 60 the move a frame may show is 30's (the
+    /// images' jitter does not shrink with the interval).
+    #[test]
+    fn the_rest_speed_is_per_second_whatever_the_frame_rate() {
+        let params = crate::upe::UpeTrackParams {
+            hidden_motion: HiddenMotion::Paper,
+            ..Default::default()
+        };
+        assert_eq!(
+            params.upe(1.0 / 60.0).rest_move,
+            params.upe(1.0 / 30.0).rest_move
+        );
+        assert!(
+            (params.upe(1.0 / 15.0).rest_move - crate::upe::DEFAULT_REST_SPEED / 15.0).abs()
+                < 1e-15
+        );
+        let prev = bend_of_seven();
+        let known = [true, true, true, true, true, true, false];
+        let step = Vec3::new(0.0, 0.0, 0.002);
+        let moved: Vec<Vec3> = prev.iter().map(|p| p + step).collect();
+        let hidden_at = |c: &UpeCoefficients| {
+            let mut nodes = moved.clone();
+            estimate_hidden(&mut nodes, &known, &prev, c);
+            nodes[6]
+        };
+        let fixed_alpha = UpeCoefficients {
+            rest_move: 0.0,
+            ..params.upe(1.0 / 30.0)
+        };
+        assert_eq!(hidden_at(&params.upe(1.0 / 30.0)), hidden_at(&fixed_alpha));
+        // At 15 frames/s the move is half the rest move: `1 - alpha` is a
+        // quarter of the fixed alpha's (Eq. 11 is linear in `alpha`).
+        let kept_shape = prev[6] + step;
+        let off = |c: &UpeCoefficients| (hidden_at(c) - kept_shape).norm();
+        let share = off(&params.upe(1.0 / 15.0)) / off(&fixed_alpha);
+        assert!((share - 0.25).abs() < 1e-9, "{share}");
     }
 
     /// EM pulls the visible node at an occlusion's edge away from it along

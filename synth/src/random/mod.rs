@@ -716,6 +716,13 @@ impl RandomScene {
         scene
     }
 
+    /// Frames of this draw to one frame at [`crate::SIMULATED_FPS`]: what
+    /// turns a duration drawn in frames at the default rate into this
+    /// draw's frames.
+    pub(crate) fn frames_per_default_frame(&self) -> f64 {
+        self.fps / crate::SIMULATED_FPS
+    }
+
     /// The camera's intrinsics.
     pub fn intrinsics(&self) -> CameraIntrinsics {
         if self.camera.width == D435I_1280X720.width {
@@ -811,7 +818,7 @@ impl RandomScene {
             }
         }
         // Poses every tenth of a second (every third frame at the default rate).
-        let rate = self.fps / crate::SIMULATED_FPS;
+        let rate = self.frames_per_default_frame();
         let poses: Vec<f64> = (0..)
             .map(|k| (3 * k) as f64 * rate)
             .take_while(|&f| f < self.frames as f64)
