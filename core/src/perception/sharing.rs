@@ -194,7 +194,7 @@ fn surface_distance(p: &Vec3, line: &RopeLine<'_>) -> f64 {
 
 /// A tracked rope's axis, its segments measured once for every pixel.
 #[derive(Debug, Clone)]
-struct Axis {
+pub(crate) struct Axis {
     /// Each segment's start, direction (end less start), middle and half
     /// length.
     segments: Vec<(Vec3, Vec3, Vec3, f64)>,
@@ -204,7 +204,7 @@ struct Axis {
 }
 
 impl Axis {
-    fn of(line: &RopeLine<'_>) -> Self {
+    pub(crate) fn of(line: &RopeLine<'_>) -> Self {
         Self {
             segments: line
                 .nodes
@@ -230,7 +230,7 @@ impl Axis {
     /// radius), metres, infinite for a rope without nodes; looking first
     /// at segment `*start` (the nearest to the last pixel, most often the
     /// nearest to this one) and leaving the nearest there.
-    fn surface_distance_from(&self, p: &Vec3, start: &mut usize) -> f64 {
+    pub(crate) fn surface_distance_from(&self, p: &Vec3, start: &mut usize) -> f64 {
         if let Some(only) = self.single {
             return (p - only).norm() - self.radius;
         }
