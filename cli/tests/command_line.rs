@@ -252,19 +252,44 @@ fn a_state_that_keeps_contradicting_the_images_is_not_reinitialised_every_frame(
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let o = run(&["track", seq, "--out", out]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let recovered = recovered_frames(out);
+    assert!(
+        !recovered.is_empty(),
+        "the scene no longer contradicts its state"
+    );
+    assert!(recovered.len() <= 5, "recovered on frames {recovered:?}");
+}
+
+/// The frames of `result.json` (written by `track`) reported recovered.
+fn recovered_frames(out: &str) -> Vec<usize> {
     let result: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out).expect("result")).expect("json");
-    let recovered: Vec<usize> = result["frames"]
+    result["frames"]
         .as_array()
         .expect("frames")
         .iter()
         .enumerate()
         .filter(|(_, f)| f["recovered"] == true)
         .map(|(i, _)| i)
-        .collect();
-    assert!(
-        !recovered.is_empty(),
-        "the scene no longer contradicts its state"
-    );
-    assert!(recovered.len() <= 5, "recovered on frames {recovered:?}");
+        .collect()
+}
+
+/// Regression for "a long rope tracked with few nodes is re-initialised
+/// again and again": drawn scene 1040 (a 1.39 m rope at rest, nothing
+/// over it) tracked with 10 nodes, 15 cm apart. The unexplained cloud was
+/// measured from the nodes, and half a spacing is beyond its 4 cm reach:
+/// recovered on frames 1, 3, 7 and 15 of 16 (as often as the back-off
+/// allowed). Measured from the axis through the nodes, never.
+#[test]
+fn a_long_rope_tracked_with_few_nodes_is_not_reinitialised() {
+    let dir = common::temp_dir("command-line", "few-nodes");
+    let (seq, out, params) = (dir.join("scene"), dir.join("r.json"), dir.join("p.json"));
+    std::fs::create_dir_all(&dir).expect("folder");
+    std::fs::write(&params, r#"{"node_count": 10}"#).expect("params");
+    let [seq, out, params] = [&seq, &out, &params].map(|p| p.to_str().expect("utf-8"));
+    let o = run(&["synth", "random", seq, "--seed", "1040", "--frames", "16"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = run(&["track", seq, "--out", out, "--params", params]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(recovered_frames(out), Vec::<usize>::new());
 }
