@@ -226,11 +226,40 @@ impl Axis {
         }
     }
 
+    /// `true` when a point of the axis lies within `reach` of `p`
+    /// (metres; the radius not taken off), looking first at segment
+    /// `*start` and leaving there the segment that was within reach: a
+    /// yes costs one segment most often, not the nearest's search.
+    pub(crate) fn axis_within(&self, p: &Vec3, reach: f64, start: &mut usize) -> bool {
+        if let Some(only) = self.single {
+            return (p - only).norm_squared() <= reach * reach;
+        }
+        let n = self.segments.len();
+        for j in (0..n).map(|j| (j + *start) % n) {
+            let (a, ab, mid, half) = &self.segments[j];
+            let bound = reach + half;
+            if (p - mid).norm_squared() > bound * bound {
+                continue;
+            }
+            let len2 = ab.norm_squared();
+            let t = if len2 > 0.0 {
+                ((p - a).dot(ab) / len2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            if (p - (a + ab * t)).norm_squared() <= reach * reach {
+                *start = j;
+                return true;
+            }
+        }
+        false
+    }
+
     /// Distance from `p` to the rope's surface (its axis less its
     /// radius), metres, infinite for a rope without nodes; looking first
     /// at segment `*start` (the nearest to the last pixel, most often the
     /// nearest to this one) and leaving the nearest there.
-    pub(crate) fn surface_distance_from(&self, p: &Vec3, start: &mut usize) -> f64 {
+    fn surface_distance_from(&self, p: &Vec3, start: &mut usize) -> f64 {
         if let Some(only) = self.single {
             return (p - only).norm() - self.radius;
         }

@@ -40,7 +40,7 @@ pub fn contradicts_evidence(
     // A point that is not finite is no evidence of rope.
     let far = cloud
         .iter()
-        .filter(|x| math::is_finite(x) && axis.surface_distance_from(x, &mut start) > reach)
+        .filter(|x| math::is_finite(x) && !axis.axis_within(x, reach, &mut start))
         .count();
     let unexplained = !cloud.is_empty() && far as f64 > UNEXPLAINED_LIMIT * cloud.len() as f64;
     stretched || in_free_space || unexplained
