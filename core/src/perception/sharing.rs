@@ -192,6 +192,18 @@ fn surface_distance(p: &Vec3, line: &RopeLine<'_>) -> f64 {
     Axis::of(line).surface_distance_from(p, &mut 0)
 }
 
+/// Squared distance from `p` to the segment from `a` along `ab`.
+#[inline]
+fn nearest_squared(p: &Vec3, a: &Vec3, ab: &Vec3) -> f64 {
+    let len2 = ab.norm_squared();
+    let t = if len2 > 0.0 {
+        ((p - a).dot(ab) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p - (a + ab * t)).norm_squared()
+}
+
 /// A tracked rope's axis, its segments measured once for every pixel.
 #[derive(Debug, Clone)]
 pub(crate) struct Axis {
@@ -241,13 +253,7 @@ impl Axis {
             if (p - mid).norm_squared() > bound * bound {
                 continue;
             }
-            let len2 = ab.norm_squared();
-            let t = if len2 > 0.0 {
-                ((p - a).dot(ab) / len2).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            if (p - (a + ab * t)).norm_squared() <= reach * reach {
+            if nearest_squared(p, a, ab) <= reach * reach {
                 *start = j;
                 return true;
             }
@@ -273,13 +279,7 @@ impl Axis {
             if (p - mid).norm_squared() > reach * reach {
                 continue;
             }
-            let len2 = ab.norm_squared();
-            let t = if len2 > 0.0 {
-                ((p - a).dot(ab) / len2).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            let d2 = (p - (a + ab * t)).norm_squared();
+            let d2 = nearest_squared(p, a, ab);
             if d2 < best2 {
                 (best2, best, nearest) = (d2, libm::sqrt(d2), j);
             }
