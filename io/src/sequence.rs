@@ -26,6 +26,7 @@ pub const MAX_OCCLUSIONS: usize = 10_000;
 /// Largest JSON file read, bytes.
 pub const MAX_JSON_BYTES: usize = 64 * 1024 * 1024;
 
+use upetrack::perception::camera::is_frame_rate;
 pub use upetrack::perception::camera::{DEFAULT_DEPTH_SCALE, DEFAULT_FPS, MAX_FPS};
 /// Colour folder names accepted, in order of preference.
 pub const COLOR_DIRS: [&str; 3] = ["color", "rgb", "image"];
@@ -454,10 +455,10 @@ fn rates<S: Source>(
         ));
     }
     let fps = config.fps.or(fps).unwrap_or(DEFAULT_FPS);
-    if !(fps.is_finite() && fps > 0.0 && fps <= MAX_FPS) {
+    if !is_frame_rate(fps) {
         return Err(SequenceError::invalid(
             &dlo_path,
-            format!("fps {fps} must be in (0, 10000]"),
+            format!("fps {fps} must be in (0, {MAX_FPS}]"),
         ));
     }
     Ok((depth_scale, fps))

@@ -13,6 +13,12 @@ pub const DEFAULT_DEPTH_SCALE: f64 = 0.001;
 pub const DEFAULT_FPS: f64 = 30.0;
 /// Fastest frame rate accepted, frames per second.
 pub const MAX_FPS: f64 = 10_000.0;
+
+/// `true` for a frame rate a tracker and a sequence accept: a finite
+/// number of frames per second in `(0, MAX_FPS]`.
+pub fn is_frame_rate(fps: f64) -> bool {
+    fps.is_finite() && fps > 0.0 && fps <= MAX_FPS
+}
 /// Depth noise of the D435i's stereo matching, as a disparity error in pixels.
 pub const SUBPIXEL_DISPARITY: f64 = 0.08;
 /// The D435i's stereo baseline, metres.

@@ -9,7 +9,9 @@ use crate::baselines::trackdlo::TrackDloReport;
 use crate::math::{self, Vec2, Vec3};
 use crate::motion::RigidMotion;
 use crate::params::{Params, ParamsError};
-use crate::perception::camera::{CameraError, CameraIntrinsics, DEFAULT_FPS, MAX_FPS};
+use crate::perception::camera::{
+    is_frame_rate, CameraError, CameraIntrinsics, DEFAULT_FPS, MAX_FPS,
+};
 use crate::perception::ego_motion::CameraMotion;
 use crate::perception::evidence::Evidence;
 use crate::perception::frame::{Frame, FrameError};
@@ -323,7 +325,7 @@ impl Tracker {
     /// (`rest_speed_m_per_s`) become moves per frame with it. Effective
     /// next frame.
     pub fn set_frame_rate(&mut self, fps: f64) -> Result<(), TrackerError> {
-        if !(fps.is_finite() && fps > 0.0 && fps <= MAX_FPS) {
+        if !is_frame_rate(fps) {
             return Err(TrackerError::FrameRate { fps });
         }
         self.frame_interval = 1.0 / fps;
