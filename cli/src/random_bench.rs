@@ -49,7 +49,7 @@ struct RandomComparison {
 
 /// What the simulator makes of drawn scene `seed`: its version and the
 /// draw, so that a cached sequence of another draw is never reused.
-fn fingerprint(seed: u64, film: Filming) -> Result<String, CliError> {
+pub(crate) fn fingerprint(seed: u64, film: Filming) -> Result<String, CliError> {
     let draw = serde_json::to_string(&RandomScene::draw_at(seed, film.frames, film.fps))
         .map_err(|e| CliError::input(format!("random-{seed}: {e}")))?;
     Ok(format!("simulator {SIMULATOR_VERSION}, draw {draw}\n"))

@@ -214,7 +214,9 @@ pub fn random_dir(dir: &Path, seed: u64, film: Filming) -> std::path::PathBuf {
 
 /// `upetrack synth random <dir> [--seed S] [--count N] [--frames N] [--rope-prior]`:
 /// one drawn scene into `dir`, or with `--count` scenes `S..S+N` into
-/// folders `random-<seed>-<frames>f` inside it, two at a time.
+/// folders `random-<seed>-<frames>f` inside it, one per core at a time.
+/// Without `--rope-prior` a batch's folders are the ones `compare --random
+/// --data <dir>` reads: a scene already written by this simulator is kept.
 fn synth_random(args: &SynthArgs) -> Result<(), CliError> {
     let film = Filming::of(args.frames, args.fps);
     let frames = film.frames;
@@ -245,13 +247,19 @@ fn synth_random(args: &SynthArgs) -> Result<(), CliError> {
     let seeds: Vec<u64> = (seed..seed.saturating_add(count)).collect();
     let bar = progress::bar(count, "scenes", "synth random");
     for_each_parallel(&seeds, |&s| {
-        write_random(
-            s,
-            film,
-            prior,
-            &random_dir(dir, s, film),
-            &ProgressBar::hidden(),
-        )?;
+        let to = random_dir(dir, s, film);
+        let write = |d: &Path| write_random(s, film, prior, d, &ProgressBar::hidden()).map(drop);
+        if prior {
+            write(&to)?;
+        } else {
+            // Fingerprinted as `compare --random` writes them, so that it
+            // reuses these scenes and a batch run again resumes.
+            crate::bench_files::ensure_written(
+                &to,
+                &crate::random_bench::fingerprint(s, film)?,
+                write,
+            )?;
+        }
         bar.inc(1);
         Ok(())
     })?;
@@ -278,7 +286,6 @@ pub fn write_random(
     write_scenario_and_video(writer, dir, None, bar)
 }
 
-/// Runs `work` on every item, one item per thread at a time on as many
 /// What worker threads collected under a mutex (an error when one of them
 /// panicked while holding it).
 pub fn gathered<T>(collected: std::sync::Mutex<Vec<T>>) -> Result<Vec<T>, CliError> {
@@ -287,6 +294,7 @@ pub fn gathered<T>(collected: std::sync::Mutex<Vec<T>>) -> Result<Vec<T>, CliErr
         .map_err(|_| CliError::internal("a worker thread panicked"))
 }
 
+/// Runs `work` on every item, one item per thread at a time on as many
 /// threads as the machine has cores; stops at the first error and returns it.
 pub fn for_each_parallel<T: Sync>(
     items: &[T],

@@ -149,6 +149,36 @@ fn score_tables_a_result_file_as_eval_does_and_refuses_one_that_does_not_fit() {
     assert!(!o.status.success() && err.contains("theirs.json"), "{err}");
 }
 
+/// Regression: `synth random --count` wrote its scenes without the
+/// fingerprint `compare --random` keeps, so a range written ahead (an
+/// hour for 100 long scenes) was written again, scene by scene, by the
+/// first comparison on it. Now the comparison reads them, and the batch
+/// run again keeps what is written.
+#[test]
+fn compare_random_reads_the_scenes_synth_random_wrote() {
+    let data = temp_dir("random-ahead");
+    let dir = data.to_str().expect("utf-8");
+    let synth = [
+        "synth", "random", dir, "--seed", "1000", "--count", "1", "--frames", "10",
+    ];
+    let out = run(&synth);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let again = run(&synth);
+    let err = String::from_utf8_lossy(&again.stderr);
+    assert!(again.status.success() && !err.contains("writing"), "{err}");
+    let out = run(&[
+        "compare", "--random", "tune", "--count", "1", "--frames", "10", "--data", dir, "-a",
+        "upetrack", "-q",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(!err.contains("writing"), "{err}");
+}
+
 /// `synth random` writes the drawn scene beside the contract's files (the
 /// same draw for the same seed), `--count` writes one folder per seed,
 /// options that the draw decides are refused, and `compare --random` names
