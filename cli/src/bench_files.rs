@@ -45,6 +45,17 @@ pub(crate) fn ensure_written(
     Ok(())
 }
 
+/// Removes `dir`'s fingerprint (if any): what is written there next is no
+/// benchmark's cache.
+pub(crate) fn forget_written(dir: &Path) -> Result<(), CliError> {
+    match std::fs::remove_file(dir.join(FINGERPRINT_FILE)) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+            Err(CliError::input(format!("{}: {e}", dir.display())))
+        }
+        _ => Ok(()),
+    }
+}
+
 /// Prints a benchmark's table `text`, and writes `rows` where `--json`
 /// says, `text` where `--markdown` says and between the lines `markers` of
 /// the page `--update` names.

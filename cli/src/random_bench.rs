@@ -11,10 +11,9 @@ use serde::Serialize;
 use upetrack::{Algorithm, Params};
 use upetrack_io::eval::Summary;
 use upetrack_synth::random::{MotionKind, OccluderKind, RandomScene, SeedRange, ShapeDraw};
-use upetrack_synth::SIMULATOR_VERSION;
 
 use crate::bench_files::{ensure_written, publish};
-use crate::synth::{for_each_parallel, gathered, random_dir, write_random, Filming};
+use crate::synth::{fingerprint, for_each_parallel, gathered, random_dir, write_random, Filming};
 use indicatif::ProgressBar;
 
 use crate::args::CompareArgs;
@@ -45,14 +44,6 @@ struct RandomComparison {
     frames: usize,
     rows: Vec<Row>,
     draws: Vec<RandomScene>,
-}
-
-/// What the simulator makes of drawn scene `seed`: its version and the
-/// draw, so that a cached sequence of another draw is never reused.
-pub(crate) fn fingerprint(seed: u64, film: Filming) -> Result<String, CliError> {
-    let draw = serde_json::to_string(&RandomScene::draw_at(seed, film.frames, film.fps))
-        .map_err(|e| CliError::input(format!("random-{seed}: {e}")))?;
-    Ok(format!("simulator {SIMULATOR_VERSION}, draw {draw}\n"))
 }
 
 /// The quantile `q` of `xs` (sorted copy, nearest rank; NaN left out).

@@ -5,9 +5,9 @@ use std::time::Instant;
 
 use upetrack_io::synthetic::SyntheticWriter;
 use upetrack_io::write::{write_file, y4m_frame, y4m_header};
-use upetrack_synth::random::DEFAULT_RANDOM_FRAMES;
+use upetrack_synth::random::{RandomScene, DEFAULT_RANDOM_FRAMES};
 use upetrack_synth::variant::D435I_1280X720;
-use upetrack_synth::{Scenario, SeveralKind, SeveralRopes};
+use upetrack_synth::{Scenario, SeveralKind, SeveralRopes, SIMULATOR_VERSION};
 
 use indicatif::ProgressBar;
 
@@ -250,15 +250,13 @@ fn synth_random(args: &SynthArgs) -> Result<(), CliError> {
         let to = random_dir(dir, s, film);
         let write = |d: &Path| write_random(s, film, prior, d, &ProgressBar::hidden()).map(drop);
         if prior {
+            // Its `dlo.json` is not the comparison's: no longer its cache.
+            crate::bench_files::forget_written(&to)?;
             write(&to)?;
         } else {
             // Fingerprinted as `compare --random` writes them, so that it
             // reuses these scenes and a batch run again resumes.
-            crate::bench_files::ensure_written(
-                &to,
-                &crate::random_bench::fingerprint(s, film)?,
-                write,
-            )?;
+            crate::bench_files::ensure_written(&to, &fingerprint(s, film)?, write)?;
         }
         bar.inc(1);
         Ok(())
@@ -271,6 +269,15 @@ fn synth_random(args: &SynthArgs) -> Result<(), CliError> {
         start.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+/// What the simulator makes of drawn scene `seed`: its version and the
+/// draw, so that a cached sequence of another draw is never reused.
+pub fn fingerprint(seed: u64, film: Filming) -> Result<String, CliError> {
+    let draw = RandomScene::draw_at(seed, film.frames, film.fps);
+    let draw =
+        serde_json::to_string(&draw).map_err(|e| CliError::input(format!("random-{seed}: {e}")))?;
+    Ok(format!("simulator {SIMULATOR_VERSION}, draw {draw}\n"))
 }
 
 /// Writes drawn scene `seed` into `dir` (its `scene.json` beside the contract's files).

@@ -153,7 +153,8 @@ fn score_tables_a_result_file_as_eval_does_and_refuses_one_that_does_not_fit() {
 /// fingerprint `compare --random` keeps, so a range written ahead (an
 /// hour for 100 long scenes) was written again, scene by scene, by the
 /// first comparison on it. Now the comparison reads them, and the batch
-/// run again keeps what is written.
+/// run again keeps what is written; a batch with the rope's prior is no
+/// comparison's cache.
 #[test]
 fn compare_random_reads_the_scenes_synth_random_wrote() {
     let data = temp_dir("random-ahead");
@@ -177,6 +178,13 @@ fn compare_random_reads_the_scenes_synth_random_wrote() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{err}");
     assert!(!err.contains("writing"), "{err}");
+    // Written again with the rope's prior in `dlo.json`, the folder is no
+    // longer the comparison's.
+    let mut prior = synth.to_vec();
+    prior.push("--rope-prior");
+    assert!(run(&prior).status.success());
+    let fingerprint = data.join("random-1000-10f/synth-fingerprint.txt");
+    assert!(!fingerprint.exists());
 }
 
 /// `synth random` writes the drawn scene beside the contract's files (the
