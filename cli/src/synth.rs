@@ -12,6 +12,7 @@ use upetrack_synth::{Scenario, SeveralKind, SeveralRopes, SIMULATOR_VERSION};
 use indicatif::ProgressBar;
 
 use crate::args::{SynthArgs, SynthScenario};
+use crate::bench_files::{ensure_written, forget_written};
 use crate::{progress, CliError};
 
 /// Writes `scenario` into `dir`; returns the number of frames written.
@@ -251,12 +252,12 @@ fn synth_random(args: &SynthArgs) -> Result<(), CliError> {
         let write = |d: &Path| write_random(s, film, prior, d, &ProgressBar::hidden()).map(drop);
         if prior {
             // Its `dlo.json` is not the comparison's: no longer its cache.
-            crate::bench_files::forget_written(&to)?;
+            forget_written(&to)?;
             write(&to)?;
         } else {
             // Fingerprinted as `compare --random` writes them, so that it
             // reuses these scenes and a batch run again resumes.
-            crate::bench_files::ensure_written(&to, &fingerprint(s, film)?, write)?;
+            ensure_written(&to, &fingerprint(s, film)?, write)?;
         }
         bar.inc(1);
         Ok(())

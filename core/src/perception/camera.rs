@@ -13,16 +13,16 @@ pub const DEFAULT_DEPTH_SCALE: f64 = 0.001;
 pub const DEFAULT_FPS: f64 = 30.0;
 /// Fastest frame rate accepted, frames per second.
 pub const MAX_FPS: f64 = 10_000.0;
+/// Depth noise of the D435i's stereo matching, as a disparity error in pixels.
+pub const SUBPIXEL_DISPARITY: f64 = 0.08;
+/// The D435i's stereo baseline, metres.
+pub const STEREO_BASELINE: f64 = 0.050;
 
 /// `true` for a frame rate a tracker and a sequence accept: a finite
 /// number of frames per second in `(0, MAX_FPS]`.
 pub fn is_frame_rate(fps: f64) -> bool {
     fps.is_finite() && fps > 0.0 && fps <= MAX_FPS
 }
-/// Depth noise of the D435i's stereo matching, as a disparity error in pixels.
-pub const SUBPIXEL_DISPARITY: f64 = 0.08;
-/// The D435i's stereo baseline, metres.
-pub const STEREO_BASELINE: f64 = 0.050;
 
 /// One deviation of the D435i's depth at `z` metres for a focal length of
 /// `f` pixels: `z^2 e / (f b)` for a disparity error `e`
