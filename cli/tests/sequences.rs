@@ -622,11 +622,14 @@ fn a_state_far_from_the_rope_in_view_is_recovered_from_the_images() {
     let mut t = Tracker::new(p, s.camera(), s.hsv()).expect("tracker");
     assert!(!t.process(&a, &[]).expect("a").is_lost());
     let out = t.process(&b, &[]).expect("b");
+    let upetrack::tracker::FrameStatus::Recovered(against) = out.status else {
+        panic!("not recovered: {:?}", out.status);
+    };
+    // The nodes left where the rope was explain none of it where it is.
     assert_eq!(
-        out.status,
-        upetrack::tracker::FrameStatus::Recovered,
-        "{:?}",
-        out.status
+        against.fired().collect::<Vec<_>>(),
+        ["unexplained"],
+        "{against:?}"
     );
     // The nodes are on the moved rope: the truth moved by 60 px at 0.6 m.
     let dx = 60.0 * f.groundtruth[0].z / 615.0;

@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 use upetrack::perception::initialisation::InitReport;
+use upetrack::tracker::Contradiction;
 use upetrack::Params;
 
 /// One frame of a result.
@@ -28,11 +29,59 @@ pub struct FrameRecord {
     /// was found again from what is visible.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub recovered: bool,
+    /// On a recovered frame: which recovery tests fired and what they
+    /// measured.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub recovery: Option<RecoveryRecord>,
     /// On a frame where the rope was found (initialised or recovered):
     /// the rope-shaped candidates, the one taken and why, and what was
     /// set aside.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub init: Option<InitReport>,
+}
+
+/// Why a tracked state was replaced: the recovery tests that fired and
+/// the three measures they read.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct RecoveryRecord {
+    /// `stretched`, `free_space`, `unexplained`: the tests that fired.
+    pub fired: Vec<String>,
+    /// The measures.
+    #[serde(flatten)]
+    pub measured: Contradiction,
+}
+
+impl RecoveryRecord {
+    /// The record of `c`.
+    pub fn of(c: &Contradiction) -> Self {
+        Self {
+            fired: c.fired().map(String::from).collect(),
+            measured: *c,
+        }
+    }
+}
+
+/// The recovery tests that fired in `c`, comma-separated, with what they
+/// measured: a recovered frame's reason as the page shows it.
+pub fn recovery_causes(c: &Contradiction) -> String {
+    let mut said = Vec::new();
+    if c.stretched() {
+        let s = c.stretch.unwrap_or(f64::NAN);
+        said.push(format!("stretched to {:.0} % of its length", 100.0 * s));
+    }
+    if c.in_free_space() {
+        said.push(format!(
+            "{} of {} hidden nodes in free space",
+            c.left_in_free_space, c.hidden_in_free_space
+        ));
+    }
+    if c.unexplained_cloud() {
+        said.push(format!(
+            "{:.0} % of the rope seen unexplained",
+            100.0 * c.unexplained
+        ));
+    }
+    said.join(", ")
 }
 
 /// A whole result file.

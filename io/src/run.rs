@@ -5,7 +5,7 @@ use upetrack::tracker::{FrameOutput, FrameStatus, Observation};
 use upetrack::{MultiTracker, Params, Tracker};
 
 use crate::error::SequenceError;
-use crate::result::{FrameRecord, RopeResult, TrackResult};
+use crate::result::{FrameRecord, RecoveryRecord, RopeResult, TrackResult};
 use crate::sequence::{DecodedFrame, Sequence};
 use crate::source::Source;
 
@@ -89,7 +89,11 @@ pub fn output_record(
         total_ms,
         lost: reason.is_some(),
         reason,
-        recovered: output.status == FrameStatus::Recovered,
+        recovered: matches!(output.status, FrameStatus::Recovered(_)),
+        recovery: match &output.status {
+            FrameStatus::Recovered(c) => Some(RecoveryRecord::of(c)),
+            _ => None,
+        },
         init: output.init.clone(),
     }
 }

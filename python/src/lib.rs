@@ -14,7 +14,9 @@ use pyo3::create_exception;
 use pyo3::exceptions::{PyIndexError, PyValueError};
 use pyo3::prelude::*;
 use upetrack::motion::RigidMotion;
+use upetrack::tracker::FrameStatus;
 use upetrack::{Algorithm, CameraIntrinsics, Frame, FrameOutput, HsvRange, Params, Rect};
+use upetrack_io::result::recovery_causes;
 use upetrack_io::run::{output_record, run_frame, run_frame_several};
 use upetrack_io::{Sequence as IoSequence, SequenceError as IoSequenceError, Source};
 
@@ -194,7 +196,7 @@ struct StepResult {
     visible: Py<PyArray1<bool>>,
     /// The rope could not be tracked on this frame (the nodes are the last known).
     lost: bool,
-    /// Why it is lost, else None.
+    /// Why it is lost, or why the state was replaced when recovered, else None.
     reason: Option<String>,
     /// The state was found again from the images on this frame.
     recovered: bool,
@@ -355,7 +357,10 @@ fn step_result(py: Python<'_>, output: &FrameOutput, times: [f64; 4]) -> PyResul
         nodes: PyArray2::from_vec2(py, &nodes)?.unbind(),
         visible: PyArray1::from_slice(py, &record.visible).unbind(),
         lost: record.lost,
-        reason: record.reason,
+        reason: match &output.status {
+            FrameStatus::Recovered(c) => Some(recovery_causes(c)),
+            _ => record.reason,
+        },
         recovered: record.recovered,
         segment_ms: times[0],
         cloud_ms: times[1],

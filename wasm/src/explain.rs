@@ -151,7 +151,7 @@ impl WasmTracker {
         let status = match &e.output.status {
             upetrack::tracker::FrameStatus::Initialised => "initialised",
             upetrack::tracker::FrameStatus::Tracked => "tracked",
-            upetrack::tracker::FrameStatus::Recovered => "recovered",
+            upetrack::tracker::FrameStatus::Recovered(_) => "recovered",
             upetrack::tracker::FrameStatus::Lost(_) => "lost",
         };
         let empty: &[Vec3] = &[];

@@ -245,12 +245,13 @@ impl FrameResult {
     }
 }
 
-/// `initialised`, `tracked`, `recovered` or `lost`, and why when lost.
+/// `initialised`, `tracked`, `recovered` or `lost`, and why when lost or
+/// recovered (the recovery tests that fired).
 fn status_of(out: &FrameOutput) -> (&'static str, Option<String>) {
     match &out.status {
         FrameStatus::Initialised => ("initialised", None),
         FrameStatus::Tracked => ("tracked", None),
-        FrameStatus::Recovered => ("recovered", None),
+        FrameStatus::Recovered(c) => ("recovered", Some(upetrack_io::result::recovery_causes(c))),
         FrameStatus::Lost(r) => ("lost", Some(r.to_string())),
     }
 }

@@ -39,8 +39,9 @@ mod recovery;
 mod stepper;
 
 pub(crate) use camera::CameraFollowing;
+use recovery::Judged;
 pub use recovery::{
-    contradicts_evidence, RecoveryBackoff, MAX_RECOVERY_WAIT, MIN_NODES_IN_FREE_SPACE,
+    beside_rope_found, Contradiction, RecoveryBackoff, MAX_RECOVERY_WAIT, MIN_NODES_IN_FREE_SPACE,
     STRETCH_LIMIT, UNEXPLAINED_LIMIT, UNEXPLAINED_REACH,
 };
 pub use stepper::{StepReports, Stepper};
@@ -144,8 +145,8 @@ pub enum FrameStatus {
     Tracked,
     /// The tracked state contradicted the images (a stretched rope, hidden
     /// nodes in free space, rope in view far from every node) and the rope
-    /// was found again from what is visible.
-    Recovered,
+    /// was found again from what is visible; what the images said against it.
+    Recovered(Contradiction),
     /// No tracking this frame; the nodes shown are the last known ones.
     Lost(LostReason),
 }
@@ -673,23 +674,18 @@ impl Tracker {
         let camera = self.camera;
         let input = self.step_input(&camera, frame, obs, &prev, &classes, &not_rope);
         let out = self.stepper.step(&input, &self.params);
-        if self.contradicts_evidence(&out.nodes, &obs.cloud, &out.report) {
-            if self.recovery.may_recover() {
-                let attempt = self.find_rope(frame, obs).ok();
-                self.recovery.recovered();
-                if let Some(init) = attempt.filter(|init| self.as_thick_as_tracked(init)) {
-                    let mut again = self.adopt(init, frame, obs);
-                    again.status = FrameStatus::Recovered;
-                    return again;
-                }
-            }
-        } else {
-            self.recovery.agreed();
+        let beside = match self.judge_step(frame, obs, &out, &not_rope) {
+            Judged::Kept { beside } => beside,
+            Judged::Recovered(again) => return *again,
+        };
+        let mut not_rope = self.not_rope_after(&out.nodes, &classes.visible, &obs.cloud);
+        if let Some(spacing) = self.rest_spacing(out.nodes.len()) {
+            emerging::remember_not_rope(&mut not_rope, &beside, spacing);
         }
         self.state = Some(TrackState {
             nodes: out.nodes.clone(),
             lost: false,
-            not_rope: self.not_rope_after(&out.nodes, &classes.visible, &obs.cloud),
+            not_rope,
         });
         FrameOutput {
             nodes: self.stepper.reported(out.nodes, &out.visible, &self.params),
@@ -782,17 +778,13 @@ impl Tracker {
     /// (`StepInput::not_rope`, `emerging::remembered_beside`).
     fn not_rope_after(&self, nodes: &[Vec3], visible: &[bool], cloud: &[Vec3]) -> Vec<Vec3> {
         let memory = self.state.as_ref().map_or(&[][..], |s| &s.not_rope);
-        let spacing = self
-            .rest_length
-            .map(|l| l / (nodes.len().max(2) - 1) as f64);
+        let spacing = self.rest_spacing(nodes.len());
         emerging::remembered_beside(memory, nodes, visible, cloud, spacing, self.radius())
     }
 
-    /// `true` when the nodes after a step cannot be the rope in these
-    /// images ([`contradicts_evidence`]).
-    fn contradicts_evidence(&self, nodes: &[Vec3], cloud: &[Vec3], report: &StepReports) -> bool {
-        let reach = UNEXPLAINED_REACH * self.params.visibility_radius;
-        contradicts_evidence(nodes, cloud, report, self.rest_length, reach)
+    /// The rope's rest spacing between `m` nodes, once its length is known.
+    fn rest_spacing(&self, m: usize) -> Option<f64> {
+        self.rest_length.map(|l| l / (m.max(2) - 1) as f64)
     }
 
     /// [`Tracker::observe`] then [`Tracker::update`].

@@ -1,11 +1,19 @@
-//! When a tracked state contradicts the images, and how often it is then
-//! replaced by a rope found again: recoveries in a row back off.
+//! When a tracked state contradicts the images, and what is done then: the
+//! rope found again replaces it (recoveries in a row back off), unless it
+//! is the rope tracked and what contradicted was beside it.
 
-use crate::math::{self, Vec3};
-use crate::perception::sharing::{Axis, RopeLine};
-use crate::polyline::polyline_length;
+use alloc::boxed::Box;
+use alloc::vec::Vec;
 
 use super::stepper::StepReports;
+use super::{FrameOutput, FrameStatus, Observation, Tracker};
+use crate::math::{self, Vec3};
+use crate::perception::frame::Frame;
+use crate::perception::initialisation::Initialisation;
+use crate::perception::sharing::{Axis, RopeLine};
+use crate::polyline::polyline_length;
+use crate::step::StepOutput;
+use crate::upe::emerging::{self, near_not_rope};
 
 /// A tracked rope longer than this multiple of its length at
 /// initialisation contradicts the images (ropes do not stretch).
@@ -17,33 +25,267 @@ pub const MIN_NODES_IN_FREE_SPACE: usize = 3;
 pub const UNEXPLAINED_REACH: f64 = 2.0;
 /// Share of the cloud left unexplained that contradicts the state.
 pub const UNEXPLAINED_LIMIT: f64 = 0.3;
-/// `true` when the nodes after a step cannot be the rope in these images:
-/// the rope stretched past [`STRETCH_LIMIT`] of its `rest_length`, most
-/// hidden nodes left in free space, or more than [`UNEXPLAINED_LIMIT`] of
-/// the cloud farther than `reach` from the axis through the nodes.
-pub fn contradicts_evidence(
-    nodes: &[Vec3],
-    cloud: &[Vec3],
-    report: &StepReports,
-    rest_length: Option<f64>,
-    reach: f64,
-) -> bool {
-    let stretched = rest_length.is_some_and(|l| polyline_length(nodes) > STRETCH_LIMIT * l);
-    let in_free_space = report
-        .free_space
-        .is_some_and(|f| f.left >= MIN_NODES_IN_FREE_SPACE && 2 * f.left > f.found);
-    // Measured from the axis between the nodes, not from the nodes: a
-    // rope's points lie up to half a node spacing from the nearest node,
-    // which on a long rope is more than the reach.
+/// What the images say against the nodes after a step, as the three
+/// recovery tests measure it; [`Contradiction::contradicts`] is `true`
+/// when any test fires: the rope stretched past [`STRETCH_LIMIT`] of its
+/// rest length, most hidden nodes left in free space (at least
+/// [`MIN_NODES_IN_FREE_SPACE`]), or more than [`UNEXPLAINED_LIMIT`] of the
+/// cloud farther than the reach from the axis through the nodes.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Contradiction {
+    /// The tracked length over the rest length (`None` without one).
+    pub stretch: Option<f64>,
+    /// Hidden nodes the free-space stage found in free space.
+    pub hidden_in_free_space: usize,
+    /// Of those, the ones still in free space after its correction.
+    pub left_in_free_space: usize,
+    /// Share of the cloud the nodes do not explain, leaving out points of
+    /// things remembered beside the rope.
+    pub unexplained: f64,
+}
+
+/// The finite points of `cloud` within `reach` of the axis through
+/// `nodes`, and those farther. Measured from the axis between the nodes,
+/// not from the nodes: a rope's points lie up to half a node spacing from
+/// the nearest node, which on a long rope is more than the reach.
+fn by_axis(nodes: &[Vec3], cloud: &[Vec3], reach: f64) -> (Vec<Vec3>, Vec<Vec3>) {
     let axis = Axis::of(&RopeLine { nodes, radius: 0.0 });
     let mut start = 0;
     // A point that is not finite is no evidence of rope.
-    let far = cloud
+    cloud
         .iter()
-        .filter(|x| math::is_finite(x) && !axis.axis_within(x, reach, &mut start))
-        .count();
-    let unexplained = !cloud.is_empty() && far as f64 > UNEXPLAINED_LIMIT * cloud.len() as f64;
-    stretched || in_free_space || unexplained
+        .filter(|x| math::is_finite(x))
+        .partition(|x| axis.axis_within(x, reach, &mut start))
+}
+
+/// The share of `cloud` farther than `reach` from the axis through
+/// `nodes` ([`by_axis`]), and those points; a point within a link of
+/// `not_rope` (things seen beside the rope, `rest_spacing` apart) is left
+/// out of both.
+fn unexplained_share(
+    nodes: &[Vec3],
+    cloud: &[Vec3],
+    reach: f64,
+    not_rope: &[Vec3],
+    rest_spacing: Option<f64>,
+) -> (f64, Vec<Vec3>) {
+    let (_, mut far) = by_axis(nodes, cloud, reach);
+    let mut total = cloud.len();
+    // Only the far points are looked up: the memory holds up to 256.
+    if let (Some(spacing), false) = (rest_spacing, not_rope.is_empty()) {
+        let before = far.len();
+        far.retain(|p| !near_not_rope(p, not_rope, spacing));
+        total -= before - far.len();
+    }
+    let share = if total == 0 {
+        0.0
+    } else {
+        far.len() as f64 / total as f64
+    };
+    (share, far)
+}
+
+impl Contradiction {
+    /// The three measures of `nodes` against `cloud`, the step's `report`
+    /// and the rope's `rest_length`; a point farther than `reach` (metres)
+    /// from the axis through the nodes is unexplained, unless it is one of
+    /// the things remembered beside the rope (`not_rope`).
+    pub fn measure(
+        nodes: &[Vec3],
+        cloud: &[Vec3],
+        report: &StepReports,
+        rest_length: Option<f64>,
+        reach: f64,
+        not_rope: &[Vec3],
+    ) -> Self {
+        let rest_length = rest_length.filter(|&l| l > 0.0);
+        let stretch = rest_length.map(|l| polyline_length(nodes) / l);
+        let free = report.free_space.unwrap_or_default();
+        let spacing = rest_length.map(|l| l / (nodes.len().max(2) - 1) as f64);
+        let (unexplained, _) = unexplained_share(nodes, cloud, reach, not_rope, spacing);
+        Self {
+            stretch,
+            hidden_in_free_space: free.found,
+            left_in_free_space: free.left,
+            unexplained,
+        }
+    }
+
+    /// The rope stretched past [`STRETCH_LIMIT`] (ropes do not stretch).
+    pub fn stretched(&self) -> bool {
+        self.stretch.is_some_and(|s| s > STRETCH_LIMIT)
+    }
+
+    /// Most hidden nodes found in free space stayed there.
+    pub fn in_free_space(&self) -> bool {
+        let (left, found) = (self.left_in_free_space, self.hidden_in_free_space);
+        left >= MIN_NODES_IN_FREE_SPACE && 2 * left > found
+    }
+
+    /// More than [`UNEXPLAINED_LIMIT`] of the cloud is rope the nodes do
+    /// not explain.
+    pub fn unexplained_cloud(&self) -> bool {
+        self.unexplained > UNEXPLAINED_LIMIT
+    }
+
+    /// Only the unexplained cloud fired: the state may be right and the
+    /// cloud hold something beside the rope.
+    pub fn only_unexplained(&self) -> bool {
+        self.unexplained_cloud() && !self.stretched() && !self.in_free_space()
+    }
+
+    /// `true` when the nodes cannot be the rope in these images.
+    pub fn contradicts(&self) -> bool {
+        self.stretched() || self.in_free_space() || self.unexplained_cloud()
+    }
+
+    /// The names of the tests that fire, in the order above: `stretched`,
+    /// `free_space`, `unexplained`.
+    pub fn fired(&self) -> impl Iterator<Item = &'static str> {
+        [
+            (self.stretched(), "stretched"),
+            (self.in_free_space(), "free_space"),
+            (self.unexplained_cloud(), "unexplained"),
+        ]
+        .into_iter()
+        .filter_map(|(fired, name)| fired.then_some(name))
+    }
+}
+
+/// Points of `cloud` beside the rope, when the tracked `nodes` (those
+/// `visible` on rope points) are the rope an initialisation `found` (its
+/// nodes) on the same images: every visible node, and the middle of every
+/// segment between two, lies inside that rope (within its `radius` of the
+/// found axis: a coarse state's chord across a bend does not), and of the
+/// points within
+/// `reach` of that axis
+/// at most [`UNEXPLAINED_LIMIT`] lie farther than `reach` from the nodes'
+/// (the unexplained test on the rope's own points). The points neither
+/// explains are then something rope-coloured beside the rope that the
+/// initialisation set aside by its shape, not rope the state missed;
+/// `None` when the state misses the rope found or sits on something else.
+pub fn beside_rope_found(
+    nodes: &[Vec3],
+    visible: &[bool],
+    found: &[Vec3],
+    cloud: &[Vec3],
+    (radius, reach): (f64, f64),
+) -> Option<Vec<Vec3>> {
+    let mut seen: Vec<Vec3> = nodes
+        .iter()
+        .zip(visible)
+        .filter_map(|(n, &v)| v.then_some(*n))
+        .collect();
+    seen.extend(
+        nodes
+            .windows(2)
+            .zip(visible.windows(2))
+            .filter(|(_, v)| v[0] && v[1])
+            .map(|(n, _)| 0.5 * (n[0] + n[1])),
+    );
+    let (_, off) = by_axis(found, &seen, radius);
+    if !off.is_empty() {
+        return None;
+    }
+    let (on_found, off_found) = by_axis(found, cloud, reach);
+    let (missed, _) = unexplained_share(nodes, &on_found, reach, &[], None);
+    if on_found.is_empty() || missed > UNEXPLAINED_LIMIT {
+        return None;
+    }
+    Some(by_axis(nodes, &off_found, reach).1)
+}
+
+/// What the check of a step against the images decided.
+pub(super) enum Judged {
+    /// The step's state is kept; `beside`: points to remember as things
+    /// beside the rope.
+    Kept {
+        /// Points no hidden run could reach, beside the rope found again.
+        beside: Vec<Vec3>,
+    },
+    /// The state contradicted the images and was replaced by the rope
+    /// found again: the frame's output.
+    Recovered(Box<FrameOutput>),
+}
+
+impl Tracker {
+    /// Checks the step's `out` against the images: a state that
+    /// contradicts them is replaced by the rope found again (as often as
+    /// the back-off allows, by a rope as thick as the one tracked), unless
+    /// only the unexplained cloud fired and the rope found is the one
+    /// tracked: then the state is kept, and what lay beside it returned.
+    pub(super) fn judge_step(
+        &mut self,
+        frame: &Frame<'_>,
+        obs: &Observation,
+        out: &StepOutput<StepReports>,
+        not_rope: &[Vec3],
+    ) -> Judged {
+        let against = self.contradiction(&out.nodes, &obs.cloud, &out.report, not_rope);
+        if !against.contradicts() {
+            self.recovery.agreed();
+            return Judged::Kept { beside: Vec::new() };
+        }
+        if !self.recovery.may_recover() {
+            return Judged::Kept { beside: Vec::new() };
+        }
+        let attempt = self.find_rope(frame, obs).ok();
+        self.recovery.recovered();
+        let Some(init) = attempt.filter(|init| self.as_thick_as_tracked(init)) else {
+            return Judged::Kept { beside: Vec::new() };
+        };
+        let step = (&out.nodes[..], &out.visible[..]);
+        match self.beside_the_rope_found(step, &init, &obs.cloud, &against) {
+            Some(beside) => Judged::Kept { beside },
+            None => {
+                let mut again = self.adopt(init, frame, obs);
+                again.status = FrameStatus::Recovered(against);
+                Judged::Recovered(Box::new(again))
+            }
+        }
+    }
+
+    /// What the images say against the nodes after a step, leaving out
+    /// the things remembered beside the rope ([`Contradiction::measure`]).
+    fn contradiction(
+        &self,
+        nodes: &[Vec3],
+        cloud: &[Vec3],
+        report: &StepReports,
+        not_rope: &[Vec3],
+    ) -> Contradiction {
+        let reach = UNEXPLAINED_REACH * self.params.visibility_radius;
+        Contradiction::measure(nodes, cloud, report, self.rest_length, reach, not_rope)
+    }
+
+    /// When only the unexplained cloud contradicted the state, the state
+    /// has hidden nodes (the shape a re-initialisation would lose) and the
+    /// step's nodes (and their visibility) are the rope `init` found
+    /// again, the points of `cloud` beside that rope
+    /// ([`beside_rope_found`]); `None` when the rope found is to replace
+    /// the state.
+    fn beside_the_rope_found(
+        &self,
+        (nodes, visible): (&[Vec3], &[bool]),
+        init: &Initialisation,
+        cloud: &[Vec3],
+        against: &Contradiction,
+    ) -> Option<Vec<Vec3>> {
+        let hides = visible.iter().any(|&v| !v);
+        if !against.only_unexplained() || !hides || self.rest_length.is_none() {
+            return None;
+        }
+        let reach = UNEXPLAINED_REACH * self.params.visibility_radius;
+        let beside = beside_rope_found(nodes, visible, &init.nodes, cloud, (self.radius(), reach))?;
+        // Only what no hidden run could reach is remembered: a point
+        // within reach may be its rope, a fragment the initialisation set
+        // aside, which a hidden end coming out must still be able to take.
+        let spacing = self.rest_spacing(nodes.len())?;
+        Some(emerging::beyond_hidden_reach(
+            nodes, visible, &beside, spacing,
+        ))
+    }
 }
 
 /// Longest wait, in frames, between recoveries from steps that contradict
@@ -94,7 +336,6 @@ impl RecoveryBackoff {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use alloc::vec::Vec;
 
     #[test]
     fn recoveries_in_a_row_back_off_exponentially_up_to_the_cap() {
@@ -142,24 +383,103 @@ mod tests {
         let reach = UNEXPLAINED_REACH * 0.02;
         let (points, nodes) = rope_and_nodes(3.0);
         let reports = StepReports::default();
-        assert!(!contradicts_evidence(
-            &nodes,
-            &points,
-            &reports,
-            Some(3.0),
-            reach
-        ));
+        let exact = Contradiction::measure(&nodes, &points, &reports, Some(3.0), reach, &[]);
+        assert!(!exact.contradicts(), "{exact:?}");
         // The same nodes 5 cm beside the rope explain none of it.
         let beside: Vec<Vec3> = nodes
             .iter()
             .map(|n| n + Vec3::new(0.0, 0.05, 0.0))
             .collect();
-        assert!(contradicts_evidence(
-            &beside,
-            &points,
-            &reports,
-            Some(3.0),
-            reach
-        ));
+        let off = Contradiction::measure(&beside, &points, &reports, Some(3.0), reach, &[]);
+        assert!(off.contradicts(), "{off:?}");
+        assert_eq!(off.fired().collect::<Vec<_>>(), ["unexplained"]);
+    }
+
+    /// A square of points 20 cm beside the middle of the straight rope of
+    /// [`rope_and_nodes`], 5 mm apart, 12 cm a side: as many points as
+    /// 0.6 of the rope's.
+    fn block_beside(length: f64) -> Vec<Vec3> {
+        let mut block = Vec::new();
+        for i in 0..24 {
+            for j in 0..24 {
+                let (x, y) = (i as f64 * 0.005, j as f64 * 0.005);
+                block.push(Vec3::new(0.5 * length - 0.06 + x, 0.2 + y, 0.97));
+            }
+        }
+        block
+    }
+
+    #[test]
+    fn things_remembered_beside_the_rope_are_not_unexplained_rope() {
+        let reach = UNEXPLAINED_REACH * 0.02;
+        let (mut cloud, nodes) = rope_and_nodes(1.0);
+        let block = block_beside(1.0);
+        cloud.extend(&block);
+        let reports = StepReports::default();
+        let unknown = Contradiction::measure(&nodes, &cloud, &reports, Some(1.0), reach, &[]);
+        assert!(unknown.unexplained_cloud(), "{unknown:?}");
+        assert!(unknown.only_unexplained());
+        // Remembered at the memory's own spacing (a quarter of a rest
+        // spacing, 1.1 cm here): every point of the block is near one.
+        let mut memory = Vec::new();
+        crate::upe::emerging::remember_not_rope(&mut memory, &block, 1.0 / 23.0);
+        let known = Contradiction::measure(&nodes, &cloud, &reports, Some(1.0), reach, &memory);
+        assert_eq!(known.unexplained, 0.0, "{known:?}");
+        assert!(!known.contradicts());
+    }
+
+    #[test]
+    fn the_rope_found_again_where_the_nodes_are_leaves_the_rest_beside_it() {
+        let reach = UNEXPLAINED_REACH * 0.02;
+        let (mut cloud, nodes) = rope_and_nodes(1.0);
+        let block = block_beside(1.0);
+        cloud.extend(&block);
+        let visible = [true; 24];
+        // The same rope, found with other nodes: the block is beside it.
+        let found: Vec<Vec3> = (0..17)
+            .map(|k| Vec3::new(k as f64 / 16.0, 0.0, 1.0))
+            .collect();
+        let beside = beside_rope_found(&nodes, &visible, &found, &cloud, (0.0075, reach));
+        assert_eq!(beside.as_deref(), Some(&block[..]));
+        // Nodes 5 cm off the rope found are not that rope.
+        let off: Vec<Vec3> = nodes
+            .iter()
+            .map(|n| n + Vec3::new(0.0, 0.05, 0.0))
+            .collect();
+        assert_eq!(
+            beside_rope_found(&off, &visible, &found, &cloud, (0.0075, reach)),
+            None
+        );
+        // Nodes 1 cm beside it explain its points (within the 4 cm reach)
+        // but lie outside the rope (7.5 mm radius): a coarse state the
+        // rope found is to replace.
+        let beside_it: Vec<Vec3> = nodes
+            .iter()
+            .map(|n| n + Vec3::new(0.0, 0.01, 0.0))
+            .collect();
+        assert_eq!(
+            beside_rope_found(&beside_it, &visible, &found, &cloud, (0.0075, reach)),
+            None
+        );
+        // Nodes on only the first half miss half the rope found.
+        let half: Vec<Vec3> = nodes
+            .iter()
+            .map(|n| Vec3::new(0.5 * n.x, 0.0, 1.0))
+            .collect();
+        assert_eq!(
+            beside_rope_found(&half, &visible, &found, &cloud, (0.0075, reach)),
+            None
+        );
+        // A visible node on the block is on something else.
+        let mut onto = nodes.clone();
+        onto[12] = block[300];
+        assert_eq!(
+            beside_rope_found(&onto, &visible, &found, &cloud, (0.0075, reach)),
+            None
+        );
+        // Unless hidden: a hidden node may lie anywhere the step put it.
+        let mut hidden = visible;
+        hidden[12] = false;
+        assert!(beside_rope_found(&onto, &hidden, &found, &cloud, (0.0075, reach)).is_some());
     }
 }

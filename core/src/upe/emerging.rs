@@ -60,6 +60,16 @@ pub fn unexplained_points(nodes: &[Vec3], cloud: &[Vec3], reach: f64) -> Vec<Vec
 /// ([`remember_not_rope`]).
 pub const MAX_NOT_ROPE_POINTS: usize = 256;
 
+/// `true` when `p` lies within a [`PIECE_LINK_SPACINGS`] link of a point
+/// of `not_rope` (things seen beside the rope, [`remember_not_rope`]): it
+/// is that thing, not rope.
+pub fn near_not_rope(p: &Vec3, not_rope: &[Vec3], rest_spacing: f64) -> bool {
+    let link = PIECE_LINK_SPACINGS * rest_spacing;
+    not_rope
+        .iter()
+        .any(|q| (p - q).norm_squared() <= link * link)
+}
+
 /// Adds to `memory` the `points` (unexplained rope-coloured points on a
 /// frame where the rope was wholly seen) not already within half a
 /// [`PIECE_LINK_SPACINGS`] link of a remembered one, up to
@@ -339,8 +349,6 @@ pub fn follow_emerged_ends(
         .collect();
     let candidates = thinned(candidates);
     let points: Vec<Vec3> = candidates.iter().map(|&(p, _)| p).collect();
-    let near =
-        |p: &Vec3, others: &[Vec3]| others.iter().any(|q| (p - q).norm_squared() <= link * link);
     let mut pieces: Vec<Piece> = connected_sets(&points, link)
         .into_iter()
         // Something no node explains yet.
@@ -354,7 +362,10 @@ pub fn follow_emerged_ends(
         })
         // Nor is a thing seen beside the rope when it was wholly in view.
         .filter(|set| {
-            let known = set.iter().filter(|p| near(p, not_rope)).count();
+            let known = set
+                .iter()
+                .filter(|p| near_not_rope(p, not_rope, rest_spacing))
+                .count();
             (known as f64) <= NOT_ROPE_SHARE * set.len() as f64
         })
         .filter_map(|set| Piece::of(&set, link))

@@ -51,7 +51,7 @@ class Intrinsics:
 
 @final
 class StepResult:
-    """One step: nodes (M x 3 float64, metres, camera frame), visibility, loss, times (ms)."""
+    """One step: nodes (M x 3 float64, metres, camera frame), visibility, loss or recovery and why (`reason`), times (ms)."""
 
     nodes: npt.NDArray[np.float64]
     visible: npt.NDArray[np.bool_]
