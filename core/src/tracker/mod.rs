@@ -35,11 +35,11 @@ use crate::visibility::{
 mod adopt;
 mod camera;
 pub mod explain;
+mod judge;
 mod recovery;
 mod stepper;
 
 pub(crate) use camera::CameraFollowing;
-use recovery::Judged;
 pub use recovery::{
     beside_rope_found, Contradiction, RecoveryBackoff, MAX_RECOVERY_WAIT, MIN_NODES_IN_FREE_SPACE,
     STRETCH_LIMIT, UNEXPLAINED_LIMIT, UNEXPLAINED_REACH,
@@ -675,8 +675,8 @@ impl Tracker {
         let input = self.step_input(&camera, frame, obs, &prev, &classes, &not_rope);
         let out = self.stepper.step(&input, &self.params);
         let beside = match self.judge_step(frame, obs, &out, &not_rope) {
-            Judged::Kept { beside } => beside,
-            Judged::Recovered(again) => return *again,
+            core::ops::ControlFlow::Continue(beside) => beside,
+            core::ops::ControlFlow::Break(again) => return again,
         };
         let mut not_rope = self.not_rope_after(&out.nodes, &classes.visible, &obs.cloud);
         if let Some(spacing) = self.rest_spacing(out.nodes.len()) {

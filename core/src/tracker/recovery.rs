@@ -1,19 +1,14 @@
-//! When a tracked state contradicts the images, and what is done then: the
-//! rope found again replaces it (recoveries in a row back off), unless it
-//! is the rope tracked and what contradicted was beside it.
+//! When a tracked state contradicts the images (the three tests, what a
+//! rope found again says of the points beside it), and how often it is
+//! then replaced: recoveries in a row back off.
 
-use alloc::boxed::Box;
 use alloc::vec::Vec;
 
 use super::stepper::StepReports;
-use super::{FrameOutput, FrameStatus, Observation, Tracker};
 use crate::math::{self, Vec3};
-use crate::perception::frame::Frame;
-use crate::perception::initialisation::Initialisation;
 use crate::perception::sharing::{Axis, RopeLine};
 use crate::polyline::polyline_length;
-use crate::step::StepOutput;
-use crate::upe::emerging::{self, near_not_rope};
+use crate::upe::emerging::near_not_rope;
 
 /// A tracked rope longer than this multiple of its length at
 /// initialisation contradicts the images (ropes do not stretch).
@@ -194,98 +189,6 @@ pub fn beside_rope_found(
         return None;
     }
     Some(by_axis(nodes, &off_found, reach).1)
-}
-
-/// What the check of a step against the images decided.
-pub(super) enum Judged {
-    /// The step's state is kept; `beside`: points to remember as things
-    /// beside the rope.
-    Kept {
-        /// Points no hidden run could reach, beside the rope found again.
-        beside: Vec<Vec3>,
-    },
-    /// The state contradicted the images and was replaced by the rope
-    /// found again: the frame's output.
-    Recovered(Box<FrameOutput>),
-}
-
-impl Tracker {
-    /// Checks the step's `out` against the images: a state that
-    /// contradicts them is replaced by the rope found again (as often as
-    /// the back-off allows, by a rope as thick as the one tracked), unless
-    /// only the unexplained cloud fired and the rope found is the one
-    /// tracked: then the state is kept, and what lay beside it returned.
-    pub(super) fn judge_step(
-        &mut self,
-        frame: &Frame<'_>,
-        obs: &Observation,
-        out: &StepOutput<StepReports>,
-        not_rope: &[Vec3],
-    ) -> Judged {
-        let against = self.contradiction(&out.nodes, &obs.cloud, &out.report, not_rope);
-        if !against.contradicts() {
-            self.recovery.agreed();
-            return Judged::Kept { beside: Vec::new() };
-        }
-        if !self.recovery.may_recover() {
-            return Judged::Kept { beside: Vec::new() };
-        }
-        let attempt = self.find_rope(frame, obs).ok();
-        self.recovery.recovered();
-        let Some(init) = attempt.filter(|init| self.as_thick_as_tracked(init)) else {
-            return Judged::Kept { beside: Vec::new() };
-        };
-        let step = (&out.nodes[..], &out.visible[..]);
-        match self.beside_the_rope_found(step, &init, &obs.cloud, &against) {
-            Some(beside) => Judged::Kept { beside },
-            None => {
-                let mut again = self.adopt(init, frame, obs);
-                again.status = FrameStatus::Recovered(against);
-                Judged::Recovered(Box::new(again))
-            }
-        }
-    }
-
-    /// What the images say against the nodes after a step, leaving out
-    /// the things remembered beside the rope ([`Contradiction::measure`]).
-    fn contradiction(
-        &self,
-        nodes: &[Vec3],
-        cloud: &[Vec3],
-        report: &StepReports,
-        not_rope: &[Vec3],
-    ) -> Contradiction {
-        let reach = UNEXPLAINED_REACH * self.params.visibility_radius;
-        Contradiction::measure(nodes, cloud, report, self.rest_length, reach, not_rope)
-    }
-
-    /// When only the unexplained cloud contradicted the state, the state
-    /// has hidden nodes (the shape a re-initialisation would lose) and the
-    /// step's nodes (and their visibility) are the rope `init` found
-    /// again, the points of `cloud` beside that rope
-    /// ([`beside_rope_found`]); `None` when the rope found is to replace
-    /// the state.
-    fn beside_the_rope_found(
-        &self,
-        (nodes, visible): (&[Vec3], &[bool]),
-        init: &Initialisation,
-        cloud: &[Vec3],
-        against: &Contradiction,
-    ) -> Option<Vec<Vec3>> {
-        let hides = visible.iter().any(|&v| !v);
-        if !against.only_unexplained() || !hides || self.rest_length.is_none() {
-            return None;
-        }
-        let reach = UNEXPLAINED_REACH * self.params.visibility_radius;
-        let beside = beside_rope_found(nodes, visible, &init.nodes, cloud, (self.radius(), reach))?;
-        // Only what no hidden run could reach is remembered: a point
-        // within reach may be its rope, a fragment the initialisation set
-        // aside, which a hidden end coming out must still be able to take.
-        let spacing = self.rest_spacing(nodes.len())?;
-        Some(emerging::beyond_hidden_reach(
-            nodes, visible, &beside, spacing,
-        ))
-    }
 }
 
 /// Longest wait, in frames, between recoveries from steps that contradict

@@ -1,0 +1,96 @@
+//! After each step: the state checked against the images
+//! ([`Contradiction`]) and, when it contradicts them, replaced by the rope
+//! found again, unless that rope is the one tracked and what contradicted
+//! lay beside it.
+
+use alloc::vec::Vec;
+use core::ops::ControlFlow;
+
+use super::recovery::{beside_rope_found, Contradiction, UNEXPLAINED_REACH};
+use super::stepper::StepReports;
+use super::{FrameOutput, FrameStatus, Observation, Tracker};
+use crate::math::Vec3;
+use crate::perception::frame::Frame;
+use crate::perception::initialisation::Initialisation;
+use crate::step::StepOutput;
+use crate::upe::emerging;
+
+impl Tracker {
+    /// Checks the step's `out` against the images: a state that
+    /// contradicts them is replaced by the rope found again (as often as
+    /// the back-off allows, by a rope as thick as the one tracked), unless
+    /// only the unexplained cloud fired and the rope found is the one
+    /// tracked: then the state is kept. `Continue` with the points to
+    /// remember beside the rope, or `Break` with the recovered frame.
+    pub(super) fn judge_step(
+        &mut self,
+        frame: &Frame<'_>,
+        obs: &Observation,
+        out: &StepOutput<StepReports>,
+        not_rope: &[Vec3],
+    ) -> ControlFlow<FrameOutput, Vec<Vec3>> {
+        let against = self.contradiction(&out.nodes, &obs.cloud, &out.report, not_rope);
+        if !against.contradicts() {
+            self.recovery.agreed();
+            return ControlFlow::Continue(Vec::new());
+        }
+        if !self.recovery.may_recover() {
+            return ControlFlow::Continue(Vec::new());
+        }
+        let attempt = self.find_rope(frame, obs).ok();
+        self.recovery.recovered();
+        let Some(init) = attempt.filter(|init| self.as_thick_as_tracked(init)) else {
+            return ControlFlow::Continue(Vec::new());
+        };
+        let step = (&out.nodes[..], &out.visible[..]);
+        match self.beside_the_rope_found(step, &init, &obs.cloud, &against) {
+            Some(beside) => ControlFlow::Continue(beside),
+            None => {
+                let mut again = self.adopt(init, frame, obs);
+                again.status = FrameStatus::Recovered(against);
+                ControlFlow::Break(again)
+            }
+        }
+    }
+
+    /// What the images say against the nodes after a step, leaving out
+    /// the things remembered beside the rope ([`Contradiction::measure`]).
+    fn contradiction(
+        &self,
+        nodes: &[Vec3],
+        cloud: &[Vec3],
+        report: &StepReports,
+        not_rope: &[Vec3],
+    ) -> Contradiction {
+        let reach = UNEXPLAINED_REACH * self.params.visibility_radius;
+        Contradiction::measure(nodes, cloud, report, self.rest_length, reach, not_rope)
+    }
+
+    /// When only the unexplained cloud contradicted the state, the state
+    /// has hidden nodes (the shape a re-initialisation would lose) and the
+    /// step's nodes (and their visibility) are the rope `init` found
+    /// again, the points of `cloud` beside that rope
+    /// ([`beside_rope_found`]); `None` when the rope found is to replace
+    /// the state.
+    fn beside_the_rope_found(
+        &self,
+        (nodes, visible): (&[Vec3], &[bool]),
+        init: &Initialisation,
+        cloud: &[Vec3],
+        against: &Contradiction,
+    ) -> Option<Vec<Vec3>> {
+        let hides = visible.iter().any(|&v| !v);
+        if !against.only_unexplained() || !hides || self.rest_length.is_none() {
+            return None;
+        }
+        let reach = UNEXPLAINED_REACH * self.params.visibility_radius;
+        let beside = beside_rope_found(nodes, visible, &init.nodes, cloud, (self.radius(), reach))?;
+        // Only what no hidden run could reach is remembered: a point
+        // within reach may be its rope, a fragment the initialisation set
+        // aside, which a hidden end coming out must still be able to take.
+        let spacing = self.rest_spacing(nodes.len())?;
+        Some(emerging::beyond_hidden_reach(
+            nodes, visible, &beside, spacing,
+        ))
+    }
+}
