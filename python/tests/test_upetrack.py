@@ -111,6 +111,19 @@ def test_arrays_as_pyrealsense2_gives_them():
     assert r.total_ms >= r.track_ms >= 0.0
 
 
+def test_a_recovered_frame_says_which_test_contradicted_the_state():
+    # The rope moved 150 px between two frames (farther than its waves are
+    # apart): the nodes left where it was explain little of it where it
+    # is, and the rope is found again.
+    seq = upetrack.open(SAMPLE)
+    color, depth = seq[0]
+    tracker = seq.tracker(params={"reinit_visible_fraction": 0.0})
+    assert not tracker.step(color, depth).lost
+    r = tracker.step(np.roll(color, 150, axis=1), np.roll(depth, 150, axis=1))
+    assert r.recovered and not r.lost
+    assert "unexplained" in r.reason
+
+
 @pytest.mark.parametrize(
     "make, error, words",
     [
