@@ -62,8 +62,14 @@ impl Tracker {
         report: &StepReports,
         not_rope: &[Vec3],
     ) -> Contradiction {
-        let reach = UNEXPLAINED_REACH * self.params.visibility_radius;
+        let reach = self.unexplained_reach();
         Contradiction::measure(nodes, cloud, report, self.rest_length, reach, not_rope)
+    }
+
+    /// How far from the axis through the nodes a point of the cloud is
+    /// rope they do not explain: [`UNEXPLAINED_REACH`] visibility radii.
+    fn unexplained_reach(&self) -> f64 {
+        UNEXPLAINED_REACH * self.params.visibility_radius
     }
 
     /// When only the unexplained cloud contradicted the state, the state
@@ -80,15 +86,15 @@ impl Tracker {
         against: &Contradiction,
     ) -> Option<Vec<Vec3>> {
         let hides = visible.iter().any(|&v| !v);
-        if !against.only_unexplained() || !hides || self.rest_length.is_none() {
+        if !against.only_unexplained() || !hides {
             return None;
         }
-        let reach = UNEXPLAINED_REACH * self.params.visibility_radius;
+        let spacing = self.rest_spacing(nodes.len())?;
+        let reach = self.unexplained_reach();
         let beside = beside_rope_found(nodes, visible, &init.nodes, cloud, (self.radius(), reach))?;
         // Only what no hidden run could reach is remembered: a point
         // within reach may be its rope, a fragment the initialisation set
         // aside, which a hidden end coming out must still be able to take.
-        let spacing = self.rest_spacing(nodes.len())?;
         Some(emerging::beyond_hidden_reach(
             nodes, visible, &beside, spacing,
         ))

@@ -784,7 +784,8 @@ impl Tracker {
 
     /// The rope's rest spacing between `m` nodes, once its length is known.
     fn rest_spacing(&self, m: usize) -> Option<f64> {
-        self.rest_length.map(|l| l / (m.max(2) - 1) as f64)
+        self.rest_length
+            .map(|l| crate::upe::length::rest_spacing(l, m))
     }
 
     /// [`Tracker::observe`] then [`Tracker::update`].

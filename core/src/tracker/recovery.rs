@@ -9,6 +9,7 @@ use crate::math::{self, Vec3};
 use crate::perception::sharing::{Axis, RopeLine};
 use crate::polyline::polyline_length;
 use crate::upe::emerging::near_not_rope;
+use crate::upe::length::rest_spacing;
 
 /// A tracked rope longer than this multiple of its length at
 /// initialisation contradicts the images (ropes do not stretch).
@@ -40,32 +41,39 @@ pub struct Contradiction {
     pub unexplained: f64,
 }
 
-/// The finite points of `cloud` within `reach` of the axis through
-/// `nodes`, and those farther. Measured from the axis between the nodes,
-/// not from the nodes: a rope's points lie up to half a node spacing from
-/// the nearest node, which on a long rope is more than the reach.
-fn by_axis(nodes: &[Vec3], cloud: &[Vec3], reach: f64) -> (Vec<Vec3>, Vec<Vec3>) {
+/// Whether a point lies within `reach` of the axis through `nodes`.
+/// Measured from the axis between the nodes, not from the nodes: a rope's
+/// points lie up to half a node spacing from the nearest node, which on a
+/// long rope is more than the reach.
+fn near_axis(nodes: &[Vec3], reach: f64) -> impl FnMut(&Vec3) -> bool {
     let axis = Axis::of(&RopeLine { nodes, radius: 0.0 });
     let mut start = 0;
-    // A point that is not finite is no evidence of rope.
+    move |x| axis.axis_within(x, reach, &mut start)
+}
+
+/// The finite points of `cloud` (a point that is not finite is no
+/// evidence of rope) farther than `reach` from the axis through `nodes`.
+fn far_from_axis(nodes: &[Vec3], cloud: &[Vec3], reach: f64) -> Vec<Vec3> {
+    let mut near = near_axis(nodes, reach);
     cloud
         .iter()
-        .filter(|x| math::is_finite(x))
-        .partition(|x| axis.axis_within(x, reach, &mut start))
+        .filter(|x| math::is_finite(x) && !near(x))
+        .copied()
+        .collect()
 }
 
 /// The share of `cloud` farther than `reach` from the axis through
-/// `nodes` ([`by_axis`]), and those points; a point within a link of
-/// `not_rope` (things seen beside the rope, `rest_spacing` apart) is left
-/// out of both.
+/// `nodes` ([`far_from_axis`]); a point within a link of `not_rope`
+/// (things seen beside the rope, `rest_spacing` apart) is left out of
+/// the count and of the cloud it is a share of.
 fn unexplained_share(
     nodes: &[Vec3],
     cloud: &[Vec3],
     reach: f64,
     not_rope: &[Vec3],
     rest_spacing: Option<f64>,
-) -> (f64, Vec<Vec3>) {
-    let (_, mut far) = by_axis(nodes, cloud, reach);
+) -> f64 {
+    let mut far = far_from_axis(nodes, cloud, reach);
     let mut total = cloud.len();
     // Only the far points are looked up: the memory holds up to 256.
     if let (Some(spacing), false) = (rest_spacing, not_rope.is_empty()) {
@@ -73,12 +81,11 @@ fn unexplained_share(
         far.retain(|p| !near_not_rope(p, not_rope, spacing));
         total -= before - far.len();
     }
-    let share = if total == 0 {
+    if total == 0 {
         0.0
     } else {
         far.len() as f64 / total as f64
-    };
-    (share, far)
+    }
 }
 
 impl Contradiction {
@@ -97,8 +104,8 @@ impl Contradiction {
         let rest_length = rest_length.filter(|&l| l > 0.0);
         let stretch = rest_length.map(|l| polyline_length(nodes) / l);
         let free = report.free_space.unwrap_or_default();
-        let spacing = rest_length.map(|l| l / (nodes.len().max(2) - 1) as f64);
-        let (unexplained, _) = unexplained_share(nodes, cloud, reach, not_rope, spacing);
+        let spacing = rest_length.map(|l| rest_spacing(l, nodes.len()));
+        let unexplained = unexplained_share(nodes, cloud, reach, not_rope, spacing);
         Self {
             stretch,
             hidden_in_free_space: free.found,
@@ -179,16 +186,19 @@ pub fn beside_rope_found(
             .filter(|(_, v)| v[0] && v[1])
             .map(|(n, _)| 0.5 * (n[0] + n[1])),
     );
-    let (_, off) = by_axis(found, &seen, radius);
-    if !off.is_empty() {
+    if !far_from_axis(found, &seen, radius).is_empty() {
         return None;
     }
-    let (on_found, off_found) = by_axis(found, cloud, reach);
-    let (missed, _) = unexplained_share(nodes, &on_found, reach, &[], None);
+    let mut on_rope_found = near_axis(found, reach);
+    let (on_found, off_found): (Vec<Vec3>, Vec<Vec3>) = cloud
+        .iter()
+        .filter(|x| math::is_finite(x))
+        .partition(|x| on_rope_found(x));
+    let missed = unexplained_share(nodes, &on_found, reach, &[], None);
     if on_found.is_empty() || missed > UNEXPLAINED_LIMIT {
         return None;
     }
-    Some(by_axis(nodes, &off_found, reach).1)
+    Some(far_from_axis(nodes, &off_found, reach))
 }
 
 /// Longest wait, in frames, between recoveries from steps that contradict
@@ -262,6 +272,11 @@ mod tests {
         assert_eq!(b.wait, MAX_RECOVERY_WAIT);
     }
 
+    /// `nodes` moved `dy` metres across the rope (along y).
+    fn moved_across(nodes: &[Vec3], dy: f64) -> Vec<Vec3> {
+        nodes.iter().map(|n| n + Vec3::new(0.0, dy, 0.0)).collect()
+    }
+
     /// A straight rope of `length` metres seen as points every millimetre
     /// along its axis and a radius (7.5 mm) to one side, and 24 nodes on
     /// its axis.
@@ -289,10 +304,7 @@ mod tests {
         let exact = Contradiction::measure(&nodes, &points, &reports, Some(3.0), reach, &[]);
         assert!(!exact.contradicts(), "{exact:?}");
         // The same nodes 5 cm beside the rope explain none of it.
-        let beside: Vec<Vec3> = nodes
-            .iter()
-            .map(|n| n + Vec3::new(0.0, 0.05, 0.0))
-            .collect();
+        let beside = moved_across(&nodes, 0.05);
         let off = Contradiction::measure(&beside, &points, &reports, Some(3.0), reach, &[]);
         assert!(off.contradicts(), "{off:?}");
         assert_eq!(off.fired().collect::<Vec<_>>(), ["unexplained"]);
@@ -345,10 +357,7 @@ mod tests {
         let beside = beside_rope_found(&nodes, &visible, &found, &cloud, (0.0075, reach));
         assert_eq!(beside.as_deref(), Some(&block[..]));
         // Nodes 5 cm off the rope found are not that rope.
-        let off: Vec<Vec3> = nodes
-            .iter()
-            .map(|n| n + Vec3::new(0.0, 0.05, 0.0))
-            .collect();
+        let off = moved_across(&nodes, 0.05);
         assert_eq!(
             beside_rope_found(&off, &visible, &found, &cloud, (0.0075, reach)),
             None
@@ -356,10 +365,7 @@ mod tests {
         // Nodes 1 cm beside it explain its points (within the 4 cm reach)
         // but lie outside the rope (7.5 mm radius): a coarse state the
         // rope found is to replace.
-        let beside_it: Vec<Vec3> = nodes
-            .iter()
-            .map(|n| n + Vec3::new(0.0, 0.01, 0.0))
-            .collect();
+        let beside_it = moved_across(&nodes, 0.01);
         assert_eq!(
             beside_rope_found(&beside_it, &visible, &found, &cloud, (0.0075, reach)),
             None

@@ -129,6 +129,12 @@ pub fn rest_length(centre_line_length: f64, radius: f64) -> f64 {
     }
 }
 
+/// The rest spacing `L0 / (M - 1)` of `rest_length` over `nodes` nodes
+/// (one spacing for fewer than two).
+pub fn rest_spacing(rest_length: f64, nodes: usize) -> f64 {
+    rest_length / (nodes.max(2) - 1) as f64
+}
+
 /// A rope shorter than its rest length by less than this many node spacings
 /// is left as it is (the resampled polyline's own error).
 pub const MIN_SHORTFALL_SPACINGS: f64 = 0.5;
