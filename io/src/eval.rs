@@ -146,6 +146,16 @@ pub struct Summary {
     /// along the viewing ray, millimetres (positive: behind it, farther
     /// from the camera), over every visible node of every frame tracked.
     pub visible_ray_offset_mm: f64,
+    /// Mean distance, millimetres, from each end node the tracker saw to
+    /// the true rope's end it stands for, over the frames tracked (NaN
+    /// when no end was seen). Eq. 18 measures how far the nodes lie off
+    /// the rope, not whether they reach its ends: an end node drawn in
+    /// along the rope costs it nothing.
+    pub end_mm: f64,
+    /// The part of [`Summary::end_mm`] along the rope: the mean length of
+    /// centre line, millimetres, from the true tip to the point nearest
+    /// the end node (how far short of its tip the tracked rope stops).
+    pub end_arc_mm: f64,
     /// With several ropes: how often a rope's nodes came to lie nearer
     /// another rope's ground truth than its own ([`identity_swaps`]); 0
     /// for one rope.
@@ -263,6 +273,67 @@ pub fn hidden_length_error(nodes: &[Vec3], visible: &[bool], true_length: f64) -
     worst
 }
 
+/// Where an end node stands against the true rope's end: its distance
+/// from the tip and the length of centre line from the tip to the point
+/// nearest it, metres ([`end_offsets`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EndOffset {
+    /// Distance from the node to the true tip.
+    pub distance: f64,
+    /// Centre line from the tip to the node's nearest point on it.
+    pub arc: f64,
+}
+
+/// The offsets of the end nodes marked `visible` from the true rope's
+/// ends (the polyline `truth`), the node polyline's ends paired with the
+/// true ones the way that puts them nearer in all. Empty when either has
+/// fewer than two points.
+pub fn end_offsets(nodes: &[Vec3], visible: &[bool], truth: &[Vec3]) -> Vec<EndOffset> {
+    let (m, n) = (nodes.len(), truth.len());
+    if m < 2 || n < 2 || visible.len() != m {
+        return Vec::new();
+    }
+    let (first, last) = (nodes[0], nodes[m - 1]);
+    let forward = (first - truth[0]).norm() + (last - truth[n - 1]).norm();
+    let reversed = (first - truth[n - 1]).norm() + (last - truth[0]).norm();
+    let backwards: Vec<Vec3>;
+    let line = if reversed < forward {
+        backwards = truth.iter().rev().copied().collect();
+        &backwards[..]
+    } else {
+        truth
+    };
+    let from_head = |p: &Vec3| {
+        let mut best = (f64::INFINITY, 0.0);
+        let mut arc = 0.0;
+        for w in line.windows(2) {
+            let t = upetrack::math::nearest_on_segment(p, &w[0], &w[1]);
+            let q = w[0] + (w[1] - w[0]) * t;
+            let d = (p - q).norm_squared();
+            if d < best.0 {
+                best = (d, arc + (w[1] - w[0]).norm() * t);
+            }
+            arc += (w[1] - w[0]).norm();
+        }
+        (best.1, arc)
+    };
+    let mut out = Vec::new();
+    if visible[0] {
+        out.push(EndOffset {
+            distance: (first - line[0]).norm(),
+            arc: from_head(&first).0,
+        });
+    }
+    if visible[m - 1] {
+        let (at, total) = from_head(&last);
+        out.push(EndOffset {
+            distance: (last - line[n - 1]).norm(),
+            arc: total - at,
+        });
+    }
+    out
+}
+
 /// Summarises `result` against `truth`.
 pub fn summarise(
     sequence: &str,
@@ -304,6 +375,7 @@ pub fn summarise_tracks(
     let (mut mm, mut px, mut occ_mm, mut occ_px, mut clear) =
         (vec![], vec![], vec![], vec![], vec![]);
     let (mut length_errors, mut whole_length_errors, mut ray_offsets) = (vec![], vec![], vec![]);
+    let mut ends: Vec<EndOffset> = Vec::new();
     let (mut lost, mut recovered, mut last_mm) = (0, 0, f64::NAN);
     for t in tracks {
         let errs = frame_errors(t.result, t.truth, camera);
@@ -339,6 +411,7 @@ pub fn summarise_tracks(
             for (p, _) in nodes.iter().zip(&f.visible).filter(|(_, v)| **v) {
                 ray_offsets.extend(ray_offset(p, gt).map(|o| o * 1000.0));
             }
+            ends.extend(end_offsets(&nodes, &f.visible, gt));
         }
     }
     let first = tracks.first().map(|t| t.result);
@@ -368,6 +441,8 @@ pub fn summarise_tracks(
         hidden_length_error_mean: mean(&length_errors),
         length_error_max: largest(&whole_length_errors),
         visible_ray_offset_mm: mean(&ray_offsets),
+        end_mm: 1000.0 * mean(&ends.iter().map(|e| e.distance).collect::<Vec<_>>()),
+        end_arc_mm: 1000.0 * mean(&ends.iter().map(|e| e.arc).collect::<Vec<_>>()),
         identity_swaps: 0,
         swapped_frames: 0,
     }
@@ -455,6 +530,32 @@ mod tests {
             .collect();
         assert!(hidden_length_error(&line, &visible, 0.09).expect("tail") < 1e-12);
         assert_eq!(hidden_length_error(&line, &[false; 10], 0.09), None);
+    }
+
+    /// Regression for "an end node drawn in along the rope costs Eq. 18
+    /// nothing": the end offsets see it, in either node order.
+    #[test]
+    fn end_nodes_short_of_the_tips_are_measured_along_the_rope() {
+        // A true rope 1 m along x; nodes from 5 cm in to 3 cm past the far tip.
+        let truth: Vec<Vec3> = (0..=10)
+            .map(|k| Vec3::new(0.1 * k as f64, 0.0, 0.6))
+            .collect();
+        let nodes: Vec<Vec3> = (0..=10)
+            .map(|k| Vec3::new(0.05 + 0.098 * k as f64, 0.0, 0.6))
+            .collect();
+        let both = end_offsets(&nodes, &[true; 11], &truth);
+        assert_eq!(both.len(), 2);
+        assert!((both[0].distance - 0.05).abs() < 1e-12 && (both[0].arc - 0.05).abs() < 1e-12);
+        // Past the tip: as far from it, and no centre line short of it.
+        assert!((both[1].distance - 0.03).abs() < 1e-12 && both[1].arc.abs() < 1e-12);
+        let reversed: Vec<Vec3> = nodes.iter().rev().copied().collect();
+        let again = end_offsets(&reversed, &[true; 11], &truth);
+        assert!((again[0].distance - 0.03).abs() < 1e-12 && (again[1].arc - 0.05).abs() < 1e-12);
+        // A hidden end is not measured; too few points, nothing.
+        let mut visible = [true; 11];
+        visible[0] = false;
+        assert_eq!(end_offsets(&nodes, &visible, &truth).len(), 1);
+        assert!(end_offsets(&nodes[..1], &[true], &truth).is_empty());
     }
 
     #[test]
