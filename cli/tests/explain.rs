@@ -11,7 +11,7 @@ fn an_explained_frame_is_the_update_itself_stage_by_stage() {
     let mut s = Scenario::new(ScenarioKind::DynamicPull, 30, 2, RenderSettings::default());
     let camera = s.camera();
     let mut tracker = Tracker::new(Params::default(), camera, s.hsv()).expect("tracker");
-    let (mut stepped, mut with_hidden) = (0, 0);
+    let (mut stepped, mut with_hidden, mut tips) = (0, 0, 0);
     while let Some(f) = s.next_frame() {
         let frame =
             Frame::new(camera.width, camera.height, &f.rgb, &f.depth, 0.001).expect("frame");
@@ -31,10 +31,33 @@ fn an_explained_frame_is_the_update_itself_stage_by_stage() {
         };
         stepped += 1;
         // The step's last stage is the state; the frame reports it with
-        // its visible nodes on their bends (`report_on_arcs`).
+        // its visible nodes on their bends (`report_on_arcs`) and its end
+        // nodes in view carried out along the state's end tangents to the
+        // rope's tips (`report_seen_tips`).
         let mut reported = step.resampled.clone();
         upetrack::upe::bends::onto_arcs(&mut reported, &out.visible);
-        assert_eq!(reported, out.nodes, "frame {}", f.index);
+        let m = reported.len();
+        assert_eq!(reported[1..m - 1], out.nodes[1..m - 1], "frame {}", f.index);
+        for (end, inner) in [(0, 1), (m - 1, m - 2)] {
+            if reported[end] == out.nodes[end] {
+                continue;
+            }
+            assert!(
+                out.visible[end],
+                "frame {}: hidden end {end} moved",
+                f.index
+            );
+            let state = step.resampled[end];
+            let tangent = (state - step.resampled[inner]).normalize();
+            let moved = out.nodes[end] - state;
+            let along = moved.dot(&tangent);
+            assert!(
+                along > 0.0 && (moved - tangent * along).norm() < 1e-9,
+                "frame {}: end {end} moved {moved:?}",
+                f.index
+            );
+            tips += 1;
+        }
         assert_ne!(
             step.resampled, out.nodes,
             "frame {}: nothing on a bend",
@@ -71,7 +94,7 @@ fn an_explained_frame_is_the_update_itself_stage_by_stage() {
         }
     }
     assert!(
-        stepped >= 25 && with_hidden >= 10,
-        "{stepped} frames stepped, {with_hidden} with hidden nodes"
+        stepped >= 25 && with_hidden >= 10 && tips > 0,
+        "{stepped} frames stepped, {with_hidden} with hidden nodes, {tips} ends carried to their tips"
     );
 }

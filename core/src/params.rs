@@ -161,6 +161,7 @@ impl Params {
                 follow_emerged_ends: false,
                 hidden_under_crossings: false,
                 report_on_arcs: false,
+                report_seen_tips: false,
                 ..upe
             },
             follow_camera: false,

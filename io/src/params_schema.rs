@@ -358,6 +358,13 @@ pub const PARAMETERS: &[ParamInfo] = &[
         ParamKind::Bool,
     ),
     p(
+        "report_seen_tips",
+        Upetrack,
+        "ends at their tips",
+        "An end node in view is reported where the rope's tip is seen, not where EM leaves it, inside the tip (off: the paper's nodes)",
+        ParamKind::Bool,
+    ),
+    p(
         "rest_speed_m_per_s",
         Upetrack,
         "rest speed",

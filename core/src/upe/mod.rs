@@ -166,6 +166,12 @@ pub struct UpeTrackParams {
     /// the next frame starts from EM's. Default true; false is the paper's
     /// nodes.
     pub report_on_arcs: bool,
+    /// Report each end node in view where the rope's tip is seen
+    /// (`length::seen_tip`) rather than where EM left it, inside the tip
+    /// (its Gaussian has points on one side only). Only the reported
+    /// nodes move: the next frame starts from EM's. Default true; false is
+    /// the paper's nodes.
+    pub report_seen_tips: bool,
     /// Weight of the uniform outlier component (`w`, Eq. 3). Default 0.1.
     pub outlier_weight: f64,
     /// EM stops when no node moves more than this in an iteration, metres. Default 0.1 mm.
@@ -201,6 +207,7 @@ impl Default for UpeTrackParams {
             follow_emerged_ends: true,
             hidden_under_crossings: true,
             report_on_arcs: true,
+            report_seen_tips: true,
             outlier_weight: 0.1,
             em_tolerance: 1e-4,
             em_max_iterations: 10,
