@@ -37,6 +37,7 @@ mod camera;
 pub mod explain;
 mod judge;
 mod recovery;
+mod report;
 mod stepper;
 
 pub(crate) use camera::CameraFollowing;
@@ -47,7 +48,6 @@ pub use recovery::{
 pub use stepper::{StepReports, Stepper};
 
 use crate::upe::emerging;
-use crate::upe::length::seen_tip;
 
 /// After a jump re-initialisation was refused, it is tried again only once
 /// the cloud has grown by this fraction: the attempt costs a whole
@@ -781,33 +781,6 @@ impl Tracker {
         let memory = self.state.as_ref().map_or(&[][..], |s| &s.not_rope);
         let spacing = self.rest_spacing(nodes.len());
         emerging::remembered_beside(memory, nodes, visible, cloud, spacing, self.radius())
-    }
-
-    /// The nodes to report of a step's state `nodes` (`Stepper::reported`),
-    /// with UPETrack's end nodes in view where the rope's tips are seen
-    /// when `report_seen_tips` is set.
-    fn reported(
-        &self,
-        nodes: Vec<Vec3>,
-        visible: &[bool],
-        frame: &Frame<'_>,
-        obs: &Observation,
-    ) -> Vec<Vec3> {
-        let mut out = self.stepper.reported(nodes.clone(), visible, &self.params);
-        let upe = matches!(self.stepper, Stepper::Upetrack);
-        let spacing = self.rest_spacing(nodes.len());
-        if let (true, true, Some(spacing)) = (upe, self.params.upetrack.report_seen_tips, spacing) {
-            let e = self.evidence(&self.camera, frame, obs);
-            for end in [0, nodes.len().saturating_sub(1)] {
-                if visible.get(end) == Some(&true) {
-                    let shows = |p: &Vec3| e.shows_rope_at(p);
-                    if let Some(tip) = seen_tip(&nodes, end, spacing, e.radius, &shows) {
-                        out[end] = tip;
-                    }
-                }
-            }
-        }
-        out
     }
 
     /// The rope's rest spacing between `m` nodes, once its length is known.
