@@ -145,9 +145,9 @@ fn tables(
             fmt(share(lost), 1),
         );
     }
-    s += "\nThe whole rope's length (each sequence's largest relative error of the node polyline's length against the true centre line's, over its frames), the visible nodes' mean offset from the true centre line along the viewing ray (positive: behind it), and the ends seen (each sequence's mean distance from an end node in view to the true rope's tip, and how much centre line lies between the tip and the node: how far short of it the tracked rope stops), over the sequences:\n\n\
-         | algorithm | length error max: median | p90 | max | ray offset mm: median | p10 | p90 | median of its size | end mm: median | p90 | short of the tip mm: median |\n\
-         |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    s += "\nThe whole rope's length (each sequence's largest relative error of the node polyline's length against the true centre line's, over its frames), the visible nodes' mean offset from the true centre line along the viewing ray (positive: behind it), the ends seen (each sequence's mean distance from an end node in view to the true rope's tip, and how much centre line lies between the tip and the node: how far short of it the tracked rope stops) and the hidden ends (the same distance for an end node not seen), over the sequences:\n\n\
+         | algorithm | length error max: median | p90 | max | ray offset mm: median | p10 | p90 | median of its size | end mm: median | p90 | short of the tip mm: median | hidden end mm: median | p90 |\n\
+         |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for a in algorithms {
         let mine: Vec<&Row> = rows
             .iter()
@@ -164,8 +164,9 @@ fn tables(
         let size: Vec<f64> = offset.iter().map(|o| o.abs()).collect();
         let end: Vec<f64> = mine.iter().map(|r| r.summary.end_mm).collect();
         let short: Vec<f64> = mine.iter().map(|r| r.summary.end_arc_mm).collect();
+        let hidden: Vec<f64> = mine.iter().map(|r| r.summary.hidden_end_mm).collect();
         s += &format!(
-            "| {} | {} % | {} % | {} % | {} | {} | {} | {} | {} | {} | {} |\n",
+            "| {} | {} % | {} % | {} % | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
             a.name(),
             fmt(quantile(&length, 0.5), 1),
             fmt(quantile(&length, 0.9), 1),
@@ -177,6 +178,8 @@ fn tables(
             fmt(quantile(&end, 0.5), 1),
             fmt(quantile(&end, 0.9), 1),
             fmt(quantile(&short, 0.5), 1),
+            fmt(quantile(&hidden, 0.5), 1),
+            fmt(quantile(&hidden, 0.9), 1),
         );
     }
     let mut ours: Vec<&Row> = rows

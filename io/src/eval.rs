@@ -156,6 +156,10 @@ pub struct Summary {
     /// centre line, millimetres, from the true tip to the point nearest
     /// the end node (how far short of its tip the tracked rope stops).
     pub end_arc_mm: f64,
+    /// The same distance as [`Summary::end_mm`] for the end nodes the
+    /// tracker did not see: how near its estimate of a hidden end comes to
+    /// the rope's tip (NaN when no end was hidden).
+    pub hidden_end_mm: f64,
     /// With several ropes: how often a rope's nodes came to lie nearer
     /// another rope's ground truth than its own ([`identity_swaps`]); 0
     /// for one rope.
@@ -284,13 +288,13 @@ pub struct EndOffset {
     pub arc: f64,
 }
 
-/// The offsets of the end nodes marked `visible` from the true rope's
+/// The offsets of the end nodes marked in `measured` from the true rope's
 /// ends (the polyline `truth`), the node polyline's ends paired with the
 /// true ones the way that puts them nearer in all. Empty when either has
 /// fewer than two points.
-pub fn end_offsets(nodes: &[Vec3], visible: &[bool], truth: &[Vec3]) -> Vec<EndOffset> {
+pub fn end_offsets(nodes: &[Vec3], measured: &[bool], truth: &[Vec3]) -> Vec<EndOffset> {
     let (m, n) = (nodes.len(), truth.len());
-    if m < 2 || n < 2 || visible.len() != m {
+    if m < 2 || n < 2 || measured.len() != m {
         return Vec::new();
     }
     let (first, last) = (nodes[0], nodes[m - 1]);
@@ -318,13 +322,13 @@ pub fn end_offsets(nodes: &[Vec3], visible: &[bool], truth: &[Vec3]) -> Vec<EndO
         (best.1, arc)
     };
     let mut out = Vec::new();
-    if visible[0] {
+    if measured[0] {
         out.push(EndOffset {
             distance: (first - line[0]).norm(),
             arc: from_head(&first).0,
         });
     }
-    if visible[m - 1] {
+    if measured[m - 1] {
         let (at, total) = from_head(&last);
         out.push(EndOffset {
             distance: (last - line[n - 1]).norm(),
@@ -375,7 +379,7 @@ pub fn summarise_tracks(
     let (mut mm, mut px, mut occ_mm, mut occ_px, mut clear) =
         (vec![], vec![], vec![], vec![], vec![]);
     let (mut length_errors, mut whole_length_errors, mut ray_offsets) = (vec![], vec![], vec![]);
-    let mut ends: Vec<EndOffset> = Vec::new();
+    let (mut ends, mut hidden_ends): (Vec<EndOffset>, Vec<EndOffset>) = (vec![], vec![]);
     let (mut lost, mut recovered, mut last_mm) = (0, 0, f64::NAN);
     for t in tracks {
         let errs = frame_errors(t.result, t.truth, camera);
@@ -412,6 +416,8 @@ pub fn summarise_tracks(
                 ray_offsets.extend(ray_offset(p, gt).map(|o| o * 1000.0));
             }
             ends.extend(end_offsets(&nodes, &f.visible, gt));
+            let hidden: Vec<bool> = f.visible.iter().map(|v| !v).collect();
+            hidden_ends.extend(end_offsets(&nodes, &hidden, gt));
         }
     }
     let first = tracks.first().map(|t| t.result);
@@ -443,6 +449,7 @@ pub fn summarise_tracks(
         visible_ray_offset_mm: mean(&ray_offsets),
         end_mm: 1000.0 * mean(&ends.iter().map(|e| e.distance).collect::<Vec<_>>()),
         end_arc_mm: 1000.0 * mean(&ends.iter().map(|e| e.arc).collect::<Vec<_>>()),
+        hidden_end_mm: 1000.0 * mean(&hidden_ends.iter().map(|e| e.distance).collect::<Vec<_>>()),
         identity_swaps: 0,
         swapped_frames: 0,
     }
@@ -551,10 +558,14 @@ mod tests {
         let reversed: Vec<Vec3> = nodes.iter().rev().copied().collect();
         let again = end_offsets(&reversed, &[true; 11], &truth);
         assert!((again[0].distance - 0.03).abs() < 1e-12 && (again[1].arc - 0.05).abs() < 1e-12);
-        // A hidden end is not measured; too few points, nothing.
+        // Only the ends asked for are measured (a summary asks for the
+        // seen ones and, apart, the hidden ones); too few points, nothing.
         let mut visible = [true; 11];
         visible[0] = false;
         assert_eq!(end_offsets(&nodes, &visible, &truth).len(), 1);
+        let hidden: Vec<bool> = visible.iter().map(|v| !v).collect();
+        let head = end_offsets(&nodes, &hidden, &truth);
+        assert!(head.len() == 1 && (head[0].distance - 0.05).abs() < 1e-12);
         assert!(end_offsets(&nodes[..1], &[true], &truth).is_empty());
     }
 
