@@ -2,6 +2,7 @@
 //! in millimetres and pixels, and the summary statistics of a sequence.
 
 use serde::Serialize;
+use upetrack::curve::RopeCurve;
 use upetrack::math::Vec3;
 use upetrack::metrics::{frame_error, frame_error_px};
 use upetrack::CameraIntrinsics;
@@ -300,40 +301,31 @@ pub fn end_offsets(nodes: &[Vec3], measured: &[bool], truth: &[Vec3]) -> Vec<End
     let (first, last) = (nodes[0], nodes[m - 1]);
     let forward = (first - truth[0]).norm() + (last - truth[n - 1]).norm();
     let reversed = (first - truth[n - 1]).norm() + (last - truth[0]).norm();
-    let backwards: Vec<Vec3>;
-    let line = if reversed < forward {
-        backwards = truth.iter().rev().copied().collect();
-        &backwards[..]
-    } else {
-        truth
-    };
-    let from_head = |p: &Vec3| {
-        let mut best = (f64::INFINITY, 0.0);
-        let mut arc = 0.0;
-        for w in line.windows(2) {
-            let t = upetrack::math::nearest_on_segment(p, &w[0], &w[1]);
-            let q = w[0] + (w[1] - w[0]) * t;
-            let d = (p - q).norm_squared();
-            if d < best.0 {
-                best = (d, arc + (w[1] - w[0]).norm() * t);
-            }
-            arc += (w[1] - w[0]).norm();
+    // The true tip node 0 stands for is the start of `truth`, or its end.
+    let head_at_start = !(reversed < forward);
+    let curve = RopeCurve::polyline(truth);
+    // Centre line between the tip at `truth`'s start (or end) and `p`'s
+    // nearest point.
+    let arc = |p: &Vec3, from_start: bool| {
+        let s = curve.project(p, 0.0, f64::INFINITY);
+        if from_start {
+            s
+        } else {
+            curve.length() - s
         }
-        (best.1, arc)
     };
+    let tip = |at_start: bool| if at_start { truth[0] } else { truth[n - 1] };
     let mut out = Vec::new();
-    if measured[0] {
-        out.push(EndOffset {
-            distance: (first - line[0]).norm(),
-            arc: from_head(&first).0,
-        });
-    }
-    if measured[m - 1] {
-        let (at, total) = from_head(&last);
-        out.push(EndOffset {
-            distance: (last - line[n - 1]).norm(),
-            arc: total - at,
-        });
+    for (node, at_start, wanted) in [
+        (first, head_at_start, measured[0]),
+        (last, !head_at_start, measured[m - 1]),
+    ] {
+        if wanted {
+            out.push(EndOffset {
+                distance: (node - tip(at_start)).norm(),
+                arc: arc(&node, at_start),
+            });
+        }
     }
     out
 }

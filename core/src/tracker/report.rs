@@ -20,18 +20,25 @@ impl Tracker {
         frame: &Frame<'_>,
         obs: &Observation,
     ) -> Vec<Vec3> {
-        let mut out = self.stepper.reported(nodes.clone(), visible, &self.params);
-        let upe = matches!(self.stepper, Stepper::Upetrack);
+        let last = nodes.len().saturating_sub(1);
         let spacing = self.rest_spacing(nodes.len());
-        if let (true, true, Some(spacing)) = (upe, self.params.upetrack.report_seen_tips, spacing) {
-            let e = self.evidence(&self.camera, frame, obs);
-            for end in [0, nodes.len().saturating_sub(1)] {
-                if visible.get(end) == Some(&true) {
-                    let shows = |p: &Vec3| e.shows_rope_at(p);
-                    if let Some(tip) = seen_tip(&nodes, end, spacing, e.radius, &shows) {
-                        out[end] = tip;
-                    }
-                }
+        let upe = matches!(self.stepper, Stepper::Upetrack);
+        let tips = match (upe && self.params.upetrack.report_seen_tips, spacing) {
+            (true, Some(spacing)) => {
+                let e = self.evidence(&self.camera, frame, obs);
+                let shows = |p: &Vec3| e.shows_rope_at(p);
+                [0, last].map(|end| {
+                    let seen = visible.get(end) == Some(&true);
+                    seen.then(|| seen_tip(&nodes, end, spacing, e.radius, &shows))
+                        .flatten()
+                })
+            }
+            _ => [None, None],
+        };
+        let mut out = self.stepper.reported(nodes, visible, &self.params);
+        for (end, tip) in [0, last].into_iter().zip(tips) {
+            if let Some(tip) = tip {
+                out[end] = tip;
             }
         }
         out
