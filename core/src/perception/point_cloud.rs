@@ -288,89 +288,120 @@ pub fn ray_column_downsample(points: &[Vec3], leaf: f64) -> Vec<Vec3> {
         return Vec::new();
     }
     let (nx, ny) = ((hi.0 - lo.0 + 1) as u64, (hi.1 - lo.1 + 1) as u64);
-    // Column ids in key order (x, then y): a dense grid over the bounding box
-    // when it is small against the cloud (a camera's image), else a table.
+    // Each column gets an id in the order first met, from a dense grid over
+    // the bounding box when it is small against the cloud (a camera's
+    // image), else from a table; its points are summed as they come.
     const NO_COLUMN: u32 = u32::MAX;
     let dense =
         nx.saturating_mul(ny) <= (DENSE_COLUMNS_PER_POINT * n as u64).max(MIN_DENSE_COLUMNS);
-    let mut cells = CellIndex::new();
-    let mut counts: Vec<u32> = if dense {
-        vec![0; (nx * ny) as usize]
+    let mut grid: Vec<u32> = if dense {
+        vec![NO_COLUMN; (nx * ny) as usize]
     } else {
         Vec::new()
     };
-    let column_of: Vec<u32> = at
+    let mut cells = CellIndex::new();
+    let mut columns: Vec<ColumnSum> = Vec::new();
+    let column_of: Vec<u32> = points
         .iter()
-        .map(|column| {
+        .zip(&at)
+        .map(|(p, column)| {
             let Some((x, y)) = *column else {
                 return NO_COLUMN;
             };
-            let c = if dense {
-                ((x - lo.0) as u64 * ny + (y - lo.1) as u64) as usize
+            let id = if dense {
+                let slot = &mut grid[((x - lo.0) as u64 * ny + (y - lo.1) as u64) as usize];
+                if *slot == NO_COLUMN {
+                    *slot = columns.len() as u32;
+                }
+                *slot as usize
             } else {
                 // In range: checked above.
-                let c = cell_key([x, y, 0]).map_or(0, |key| cells.index_of(key));
-                if c == counts.len() {
-                    counts.push(0);
-                }
-                c
+                cell_key([x, y, 0]).map_or(0, |key| cells.index_of(key))
             };
-            counts[c] += 1;
-            c as u32
+            if id == columns.len() {
+                columns.push(ColumnSum::default());
+            }
+            columns[id].add(p);
+            id as u32
         })
         .collect();
     let order: Vec<usize> = if dense {
-        (0..counts.len()).filter(|&c| counts[c] > 0).collect()
+        grid.iter()
+            .filter(|&&id| id != NO_COLUMN)
+            .map(|&id| id as usize)
+            .collect()
     } else {
         cells.by_key()
     };
-    // Counting sort of the points by column.
-    let mut start = Vec::with_capacity(counts.len() + 1);
-    let mut total = 0usize;
-    start.push(0);
-    for &k in &counts {
-        total += k as usize;
-        start.push(total);
-    }
-    let mut next = start.clone();
-    let mut grouped = vec![Vec3::zeros(); total];
-    for (p, &c) in points.iter().zip(&column_of) {
-        if c != NO_COLUMN {
-            grouped[next[c as usize]] = *p;
-            next[c as usize] += 1;
-        }
-    }
+    // Within one gap and one span the walk would split nowhere: such a
+    // column is its centroid. The few deeper ones (another layer behind,
+    // a rope seen end-on) get their points back, in input order.
     let (gap, span) = (COLUMN_GAP_RATIO * leaf, COLUMN_SPAN_RATIO * leaf);
-    let mut out = Vec::with_capacity(order.len());
-    for c in order {
-        let column = &mut grouped[start[c]..start[c + 1]];
-        let (zmin, zmax) = column
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
-                (a.min(p.z), b.max(p.z))
-            });
-        // Within one gap and one span the walk splits nowhere whatever the
-        // order: most columns need no sort.
-        if zmax - zmin > gap.min(span) {
-            column.sort_unstable_by(|a, b| a.z.total_cmp(&b.z));
+    let mut deep: Vec<Option<Vec<Vec3>>> = columns
+        .iter()
+        .map(|c| (c.zmax - c.zmin > gap.min(span)).then(Vec::new))
+        .collect();
+    if deep.iter().any(Option::is_some) {
+        for (p, &id) in points.iter().zip(&column_of) {
+            if let Some(Some(list)) = deep.get_mut(id as usize) {
+                list.push(*p);
+            }
         }
-        let mut first = 0;
-        for k in 1..=column.len() {
-            let split = k == column.len()
-                || column[k].z - column[k - 1].z > gap
-                || column[k].z - column[first].z > span;
-            if split {
-                let cluster = &column[first..k];
-                let sum = cluster.iter().fold(Vec3::zeros(), |s, p| s + p);
-                out.push(sum / cluster.len() as f64);
-                first = k;
+    }
+    let mut out = Vec::with_capacity(order.len());
+    for id in order {
+        match &mut deep[id] {
+            None => out.push(columns[id].sum / columns[id].count as f64),
+            Some(column) => {
+                column.sort_unstable_by(|a, b| a.z.total_cmp(&b.z));
+                let mut first = 0;
+                for k in 1..=column.len() {
+                    let split = k == column.len()
+                        || column[k].z - column[k - 1].z > gap
+                        || column[k].z - column[first].z > span;
+                    if split {
+                        let cluster = &column[first..k];
+                        let sum = cluster.iter().fold(Vec3::zeros(), |s, p| s + p);
+                        out.push(sum / cluster.len() as f64);
+                        first = k;
+                    }
+                }
             }
         }
     }
     out
 }
 
-/// The column grid is dense (one counter per column of the cloud's bounding
+/// One ray column's points as they are summed: their sum, count and depth
+/// range.
+struct ColumnSum {
+    sum: Vec3,
+    count: u32,
+    zmin: f64,
+    zmax: f64,
+}
+
+impl Default for ColumnSum {
+    fn default() -> Self {
+        Self {
+            sum: Vec3::zeros(),
+            count: 0,
+            zmin: f64::INFINITY,
+            zmax: f64::NEG_INFINITY,
+        }
+    }
+}
+
+impl ColumnSum {
+    fn add(&mut self, p: &Vec3) {
+        self.sum += p;
+        self.count += 1;
+        self.zmin = self.zmin.min(p.z);
+        self.zmax = self.zmax.max(p.z);
+    }
+}
+
+/// The column grid is dense (one id per column of the cloud's bounding
 /// box) while it has at most this many columns per point (16 bytes a
 /// point, less than the points themselves)...
 const DENSE_COLUMNS_PER_POINT: u64 = 4;

@@ -132,6 +132,23 @@ impl Level {
     }
 }
 
+/// Luma close enough, in integers: `R + 2G + B` (four times it).
+#[inline]
+fn luma(c: &[u8]) -> u32 {
+    c[0] as u32 + 2 * c[1] as u32 + c[2] as u32
+}
+
+/// Adds to each of `sums` the luma of its block of `S` pixels of `row`
+/// (RGB bytes).
+#[inline]
+fn add_block_lumas<const S: usize>(row: &[u8], sums: &mut [u32]) {
+    for (sum, block) in sums.iter_mut().zip(row.chunks_exact(3 * S)) {
+        for c in block.chunks_exact(3) {
+            *sum += luma(c);
+        }
+    }
+}
+
 /// The mean of four `depths` when all are known and agree (one surface),
 /// else 0.
 pub(crate) fn agreed_depth(depths: [f32; 4]) -> f32 {
@@ -240,10 +257,17 @@ impl BackgroundView {
             self.sums.iter_mut().for_each(|x| *x = 0);
             for y in v * s..(v + 1) * s {
                 let row = &frame.color[3 * y * fw..3 * (y * fw + w * s)];
-                for (sum, block) in self.sums.iter_mut().zip(row.chunks_exact(3 * s)) {
-                    for c in block.chunks_exact(3) {
-                        // Luma close enough, in integers: (R + 2G + B) / 4.
-                        *sum += c[0] as u32 + 2 * c[1] as u32 + c[2] as u32;
+                // Blocks of a known width unroll (the common sizes: the
+                // finest level is at most 320 wide).
+                match s {
+                    1 => add_block_lumas::<1>(row, &mut self.sums),
+                    2 => add_block_lumas::<2>(row, &mut self.sums),
+                    3 => add_block_lumas::<3>(row, &mut self.sums),
+                    4 => add_block_lumas::<4>(row, &mut self.sums),
+                    _ => {
+                        for (sum, block) in self.sums.iter_mut().zip(row.chunks_exact(3 * s)) {
+                            *sum += block.chunks_exact(3).map(luma).sum::<u32>();
+                        }
                     }
                 }
             }
