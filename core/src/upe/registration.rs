@@ -185,6 +185,7 @@ pub fn register_observed(
     let mut pxx = vec![0.0; k];
     let mut near: Vec<(usize, f64)> = Vec::with_capacity(k);
     let mut anchor: Vec<Vec3> = Vec::with_capacity(k);
+    let mut at: Vec<Vec3> = Vec::with_capacity(k);
     let mut offsets: Vec<u32> = Vec::with_capacity(cloud.len() + 1);
     let mut candidates: Vec<u16> = Vec::new();
     let (mut rebuild, mut built_variance, mut margin) = (true, 0.0, 0.0);
@@ -235,12 +236,16 @@ pub fn register_observed(
             rebuild = false;
         }
 
+        // The components' positions in E-step order (no double indexing
+        // in the loop below).
+        at.clear();
+        at.extend(idx.iter().map(|&m| nodes[m]));
         for (i, x) in cloud.iter().enumerate() {
             let mut denom = mu;
             near.clear();
             for &j in &candidates[offsets[i] as usize..offsets[i + 1] as usize] {
                 let j = j as usize;
-                let ej = (x - nodes[idx[j]]).norm_squared() * inv_two_var;
+                let ej = (x - at[j]).norm_squared() * inv_two_var;
                 if ej < EXPONENT_CUTOFF {
                     let gj = math::exp_neg(ej);
                     denom += gj;
