@@ -196,8 +196,9 @@ impl BackgroundGlance {
         {
             return false;
         }
-        let mut brightness = Fit::<6>::default();
-        let mut depth = Fit::<3>::default();
+        let n = self.samples.len();
+        let mut brightness = Fit::<6>::with_capacity(n);
+        let mut depth = Fit::<3>::with_capacity(n);
         let (w, h) = (self.width as usize, self.height as usize);
         let grid = grid(w, h);
         let points = along(h, grid).flat_map(|v| along(w, grid).map(move |u| (u, v)));
@@ -289,6 +290,14 @@ fn solve<const P: usize>(samples: &[([f64; P], f64)], kept: &[bool]) -> Option<S
 }
 
 impl<const P: usize> Fit<P> {
+    /// An empty fit with room for `n` samples (a glance's grid).
+    fn with_capacity(n: usize) -> Self {
+        Self {
+            samples: Vec::with_capacity(n),
+            at: Vec::with_capacity(n),
+        }
+    }
+
     fn add(&mut self, regressors: [f64; P], change: f64, at: usize) {
         self.samples.push((regressors, change));
         self.at.push(at);
