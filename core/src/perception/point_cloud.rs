@@ -615,6 +615,19 @@ mod tests {
     }
 
     #[test]
+    fn a_column_deeper_than_a_gap_is_split_whatever_the_input_order() {
+        // Two layers 20 mm apart in one column (more than the 16 mm gap of
+        // 8 mm leaves, less than the 24 mm span), given out of depth order.
+        let at = |z: f64| Vec3::new(0.0001, 0.0001, z);
+        let pts = [0.620, 0.600, 0.621, 0.601].map(at).to_vec();
+        let out = ray_column_downsample(&pts, 0.008);
+        let depths: Vec<f64> = out.iter().map(|p| p.z).collect();
+        assert_eq!(depths.len(), 2, "{depths:?}");
+        assert!((depths[0] - 0.6005).abs() < 1e-12, "{depths:?}");
+        assert!((depths[1] - 0.6205).abs() < 1e-12, "{depths:?}");
+    }
+
+    #[test]
     fn ray_columns_from_the_dense_grid_and_from_the_table_agree() {
         // A rope's pixels (a small box: the dense grid), and the same with
         // two far points that make the box too large for it (the table).

@@ -383,3 +383,50 @@ fn noise(level: &Level) -> f64 {
     }
     MAD_TO_SIGMA * median_abs(&mut laplacian) / libm::sqrt(20.0)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::SplitMix64;
+    use alloc::vec;
+
+    #[test]
+    fn the_finest_brightness_is_each_block_s_mean_luma_at_every_block_width() {
+        // Block widths 1-4 take the unrolled sums, 5 the general one.
+        for s in 1..=5usize {
+            let (w, h) = (FINEST_WIDTH as usize * s, 4 * s);
+            let mut rng = SplitMix64::new(s as u64);
+            let color: Vec<u8> = (0..3 * w * h)
+                .map(|_| (rng.uniform() * 255.0) as u8)
+                .collect();
+            let depth = vec![0u16; w * h];
+            let frame = Frame::new(w as u32, h as u32, &color, &depth, 0.001).expect("frame");
+            let camera = CameraIntrinsics {
+                width: w as u32,
+                height: h as u32,
+                fx: 300.0,
+                fy: 300.0,
+                cx: 0.5 * w as f64,
+                cy: 0.5 * h as f64,
+            };
+            let rope = Mask::new(w as u32, h as u32);
+            let view = BackgroundView::new(&frame, &camera, &rope, &[], (0.1, 3.0));
+            let finest = &view.levels[0];
+            assert_eq!((finest.width, finest.height), (FINEST_WIDTH as usize, 4));
+            for v in 0..finest.height {
+                for u in 0..finest.width {
+                    let mut sum = 0u32;
+                    for y in v * s..(v + 1) * s {
+                        for x in u * s..(u + 1) * s {
+                            let c = &color[3 * (y * w + x)..3 * (y * w + x) + 3];
+                            sum += c[0] as u32 + 2 * c[1] as u32 + c[2] as u32;
+                        }
+                    }
+                    // As the view scales: by the reciprocal.
+                    let want = sum as f32 * (1.0 / (4 * s * s) as f32);
+                    assert_eq!(finest.grey[v * finest.width + u], want, "s {s} at {u} {v}");
+                }
+            }
+        }
+    }
+}
