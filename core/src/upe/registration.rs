@@ -214,16 +214,18 @@ pub fn register_observed(
         // reach + margin then, has moved less than the margin since, and the
         // reach has not grown, so its term would be cut off anyway.
         let reach = math::sqrt(2.0 * variance * EXPONENT_CUTOFF);
+        // The components' positions in E-step order, read once.
+        at.clear();
+        at.extend(idx.iter().map(|&m| nodes[m]));
         let moved = anchor
             .iter()
-            .zip(&idx)
-            .map(|(a, &m)| (nodes[m] - a).norm_squared())
+            .zip(&at)
+            .map(|(a, y)| (y - a).norm_squared())
             .fold(0.0, f64::max);
         if rebuild || variance > built_variance || moved > margin * margin {
             built_variance = variance;
             margin = CANDIDATE_MARGIN_FRACTION * reach;
-            anchor.clear();
-            anchor.extend(idx.iter().map(|&m| nodes[m]));
+            anchor.clone_from(&at);
             let r2 = (reach + margin) * (reach + margin);
             offsets.clear();
             candidates.clear();
@@ -239,10 +241,6 @@ pub fn register_observed(
             rebuild = false;
         }
 
-        // The components' positions in E-step order (no double indexing
-        // in the loop below).
-        at.clear();
-        at.extend(idx.iter().map(|&m| nodes[m]));
         for (i, x) in cloud.iter().enumerate() {
             let mut denom = mu;
             near.clear();

@@ -138,14 +138,12 @@ fn luma(c: &[u8]) -> u32 {
     c[0] as u32 + 2 * c[1] as u32 + c[2] as u32
 }
 
-/// Adds to each of `sums` the luma of its block of `S` pixels of `row`
-/// (RGB bytes).
-#[inline]
-fn add_block_lumas<const S: usize>(row: &[u8], sums: &mut [u32]) {
-    for (sum, block) in sums.iter_mut().zip(row.chunks_exact(3 * S)) {
-        for c in block.chunks_exact(3) {
-            *sum += luma(c);
-        }
+/// Adds to each of `sums` the luma of its block of `s` pixels of `row`
+/// (RGB bytes). Always inlined, so that a constant `s` unrolls.
+#[inline(always)]
+fn add_block_lumas(row: &[u8], sums: &mut [u32], s: usize) {
+    for (sum, block) in sums.iter_mut().zip(row.chunks_exact(3 * s)) {
+        *sum += block.chunks_exact(3).map(luma).sum::<u32>();
     }
 }
 
@@ -259,16 +257,13 @@ impl BackgroundView {
                 let row = &frame.color[3 * y * fw..3 * (y * fw + w * s)];
                 // Blocks of a known width unroll (the common sizes: the
                 // finest level is at most 320 wide).
+                let sums = &mut self.sums;
                 match s {
-                    1 => add_block_lumas::<1>(row, &mut self.sums),
-                    2 => add_block_lumas::<2>(row, &mut self.sums),
-                    3 => add_block_lumas::<3>(row, &mut self.sums),
-                    4 => add_block_lumas::<4>(row, &mut self.sums),
-                    _ => {
-                        for (sum, block) in self.sums.iter_mut().zip(row.chunks_exact(3 * s)) {
-                            *sum += block.chunks_exact(3).map(luma).sum::<u32>();
-                        }
-                    }
+                    1 => add_block_lumas(row, sums, 1),
+                    2 => add_block_lumas(row, sums, 2),
+                    3 => add_block_lumas(row, sums, 3),
+                    4 => add_block_lumas(row, sums, 4),
+                    _ => add_block_lumas(row, sums, s),
                 }
             }
             for (grey, sum) in finest.grey[v * w..(v + 1) * w].iter_mut().zip(&self.sums) {
