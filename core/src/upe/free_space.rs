@@ -15,11 +15,7 @@
 //!   quarter turn: a run turned further folds back alongside the rope it
 //!   hangs from, which no rope does between two frames.
 //! - A run in the middle is drawn towards the straight chord between its
-//!   anchors, by the smallest share that clears free space, as long as it
-//!   loses no more length than the caller allows (`max_shortening`): free
-//!   space is weaker evidence than the rope's length, and a loop under an
-//!   occluder drawn to its chord lost a third of the rope for good
-//!   (`docs/algorithm-notes.md`, "Free space does not shorten the rope").
+//!   anchors, by the smallest share that clears free space.
 //!
 //! Where nothing clears every node, the choice with the fewest nodes in
 //! free space is kept (ties: the smallest change).
@@ -33,7 +29,6 @@ use alloc::vec::Vec;
 
 use super::slide::{hidden_runs, HiddenRun};
 use crate::math::{self, Vec3};
-use crate::polyline::polyline_length;
 
 /// Turning angles tried for an end run, radians: 5 degree steps ...
 const TURN_STEP: f64 = 5.0 * core::f64::consts::PI / 180.0;
@@ -66,7 +61,7 @@ fn turn(p: &Vec3, centre: &Vec3, axis: &Vec3, angle: f64) -> Vec3 {
 }
 
 /// The candidates for one run, the unchanged run first, then by growing change.
-fn candidates(nodes: &[Vec3], run: HiddenRun, max_shortening: f64) -> Vec<Vec<Vec3>> {
+fn candidates(nodes: &[Vec3], run: HiddenRun) -> Vec<Vec<Vec3>> {
     let m = nodes.len();
     let points = nodes[run.start..run.end].to_vec();
     let mut out = alloc::vec![points.clone()];
@@ -75,21 +70,18 @@ fn candidates(nodes: &[Vec3], run: HiddenRun, max_shortening: f64) -> Vec<Vec<Ve
     match (left, right) {
         (Some(a), Some(b)) => {
             let span = (run.end - run.start + 1) as f64;
-            let length = |run: &[Vec3]| polyline_length(&[&[nodes[a]], run, &[nodes[b]]].concat());
-            let old = length(&points);
             for share in CHORD_SHARES {
-                let drawn: Vec<Vec3> = points
-                    .iter()
-                    .enumerate()
-                    .map(|(k, p)| {
-                        let lambda = (k + 1) as f64 / span;
-                        let chord = nodes[a] + (nodes[b] - nodes[a]) * lambda;
-                        p + (chord - p) * share
-                    })
-                    .collect();
-                if old - length(&drawn) <= max_shortening {
-                    out.push(drawn);
-                }
+                out.push(
+                    points
+                        .iter()
+                        .enumerate()
+                        .map(|(k, p)| {
+                            let lambda = (k + 1) as f64 / span;
+                            let chord = nodes[a] + (nodes[b] - nodes[a]) * lambda;
+                            p + (chord - p) * share
+                        })
+                        .collect(),
+                );
             }
         }
         (Some(anchor), None) | (None, Some(anchor)) => {
@@ -113,14 +105,11 @@ fn candidates(nodes: &[Vec3], run: HiddenRun, max_shortening: f64) -> Vec<Vec<Ve
 }
 
 /// Moves hidden runs (`known[m] == false`) out of free space, in place:
-/// `may_hide(p)` is `false` where no hidden rope may be. A middle run is
-/// not drawn towards its chord so far that it (with its anchors) becomes
-/// more than `max_shortening` metres shorter.
+/// `may_hide(p)` is `false` where no hidden rope may be.
 pub fn clear_free_space(
     nodes: &mut [Vec3],
     known: &[bool],
     may_hide: &dyn Fn(&Vec3) -> bool,
-    max_shortening: f64,
 ) -> FreeSpaceReport {
     let mut report = FreeSpaceReport::default();
     if known.len() != nodes.len() {
@@ -133,7 +122,7 @@ pub fn clear_free_space(
             continue;
         }
         let mut best: Option<(usize, Vec<Vec3>)> = None;
-        for candidate in candidates(nodes, run, max_shortening) {
+        for candidate in candidates(nodes, run) {
             let count = in_free_space(may_hide, &candidate);
             if best.as_ref().is_none_or(|(c, _)| count < *c) {
                 let done = count == 0;
@@ -221,22 +210,14 @@ mod tests {
         // the image it sinks into the table, which then lies in front of it
         // as an occluder would.
         let mut blind = before.clone();
-        let r = clear_free_space(
-            &mut blind,
-            &known,
-            &|p| e.sight(p).allows_hidden(),
-            f64::INFINITY,
-        );
+        let r = clear_free_space(&mut blind, &known, &|p| e.sight(p).allows_hidden());
         assert_eq!((r.runs_moved, r.left), (1, 0));
         assert!(deepest(&blind) > OCCLUDER_MARGIN, "{}", deepest(&blind));
         // Knowing the table, the stage does not take a place inside it.
         let mut seeing = before.clone();
-        clear_free_space(
-            &mut seeing,
-            &known,
-            &|p| e.sight(p).allows_hidden() && !plane.hides_inside(&e, p),
-            f64::INFINITY,
-        );
+        clear_free_space(&mut seeing, &known, &|p| {
+            e.sight(p).allows_hidden() && !plane.hides_inside(&e, p)
+        });
         assert!(deepest(&seeing) < OCCLUDER_MARGIN, "{}", deepest(&seeing));
         assert_eq!(&seeing[..3], &before[..3]);
     }
@@ -251,12 +232,7 @@ mod tests {
         let before = tip_over_free_table();
         let mut nodes = before.clone();
         let known = [true, true, true, false, false, false];
-        let r = clear_free_space(
-            &mut nodes,
-            &known,
-            &|p| e.sight(p).allows_hidden(),
-            f64::INFINITY,
-        );
+        let r = clear_free_space(&mut nodes, &known, &|p| e.sight(p).allows_hidden());
         (before, nodes, r)
     }
 
@@ -269,12 +245,7 @@ mod tests {
         let known = [true, true, true, false, false, false];
         let before = nodes.clone();
         let len = |p: &[Vec3]| p.windows(2).map(|w| (w[1] - w[0]).norm()).sum::<f64>();
-        let r = clear_free_space(
-            &mut nodes,
-            &known,
-            &|p| e.sight(p).allows_hidden(),
-            f64::INFINITY,
-        );
+        let r = clear_free_space(&mut nodes, &known, &|p| e.sight(p).allows_hidden());
         assert_eq!((r.found, r.left, r.runs_moved), (3, 0, 1), "{r:?}");
         for p in &nodes[3..] {
             assert!(e.sight(p).allows_hidden(), "{p:?}");
@@ -315,14 +286,14 @@ mod tests {
             Vec3::new(2.0, 1.0, 0.6),
             Vec3::new(3.0, 0.0, 0.6),
         ];
-        let middle = candidates(&nodes, HiddenRun { start: 1, end: 3 }, f64::INFINITY);
+        let middle = candidates(&nodes, HiddenRun { start: 1, end: 3 });
         assert_eq!(middle.len(), 1 + CHORD_SHARES.len());
         assert_eq!(middle[0], nodes[1..3].to_vec());
         // Share 1/4 of the way to the chord (y = 0), then all of it.
         assert!((middle[1][0] - Vec3::new(1.0, 0.75, 0.6)).norm() < 1e-12);
         assert!((middle[4][0] - Vec3::new(1.0, 0.0, 0.6)).norm() < 1e-12);
         assert!((middle[4][1] - Vec3::new(2.0, 0.0, 0.6)).norm() < 1e-12);
-        let end = candidates(&nodes, HiddenRun { start: 2, end: 4 }, f64::INFINITY);
+        let end = candidates(&nodes, HiddenRun { start: 2, end: 4 });
         assert_eq!(end.len(), 1 + 2 * TURN_STEPS);
         // +5 degrees, then -5, ..., the last: a quarter turn back about node 1.
         let first = end[1][0] - nodes[1];
@@ -367,12 +338,9 @@ mod tests {
             at(26.0, 24.0),
         ];
         let before = nodes.clone();
-        let r = clear_free_space(
-            &mut nodes,
-            &[true, true, false, false],
-            &|p| e.sight(p).allows_hidden(),
-            f64::INFINITY,
-        );
+        let r = clear_free_space(&mut nodes, &[true, true, false, false], &|p| {
+            e.sight(p).allows_hidden()
+        });
         assert_eq!((r.found, r.left, r.runs_moved), (2, 2, 0));
         assert_eq!(nodes, before);
     }
@@ -419,64 +387,13 @@ mod tests {
             at(32.0, 34.0),
         ];
         let known = [true, true, false, false, true, true];
-        let r = clear_free_space(
-            &mut nodes,
-            &known,
-            &|p| e.sight(p).allows_hidden(),
-            f64::INFINITY,
-        );
+        let r = clear_free_space(&mut nodes, &known, &|p| e.sight(p).allows_hidden());
         assert_eq!((r.found, r.left, r.runs_moved), (2, 0, 1), "{r:?}");
         assert!(nodes[2..4].iter().all(|p| e.sight(p).allows_hidden()));
         // Nothing in free space: nothing moves.
         let mut again = nodes.clone();
-        let r = clear_free_space(
-            &mut again,
-            &known,
-            &|p| e.sight(p).allows_hidden(),
-            f64::INFINITY,
-        );
+        let r = clear_free_space(&mut again, &known, &|p| e.sight(p).allows_hidden());
         assert_eq!((r.found, r.runs_moved), (0, 0));
         assert_eq!(again, nodes);
-    }
-    #[test]
-    fn a_middle_run_is_not_drawn_to_its_chord_past_the_length_it_may_lose() {
-        // The band of `a_middle_run_in_free_space_is_drawn_towards_its_chord`,
-        // with a run that bulges 12 px out: only a chord share that costs
-        // the run more than a spacing clears it.
-        let rects = [Rect {
-            x: 26,
-            y: 20,
-            w: 12,
-            h: 9,
-        }];
-        let t = table();
-        let frame = t.frame();
-        let e = t.evidence(&frame, &rects, 0.0075);
-        let before = vec![
-            at(32.0, 14.0),
-            at(32.0, 18.0),
-            at(20.0, 22.0),
-            at(20.0, 26.0),
-            at(32.0, 30.0),
-            at(32.0, 34.0),
-        ];
-        let known = [true, true, false, false, true, true];
-        let len = |p: &[Vec3]| polyline_length(&p[1..5]);
-        let may_hide = |p: &Vec3| e.sight(p).allows_hidden();
-        let mut free = before.clone();
-        clear_free_space(&mut free, &known, &may_hide, f64::INFINITY);
-        let lost = len(&before) - len(&free);
-        assert!(lost > 0.0);
-        // Allowed a little less than that, it draws the run less far (or
-        // not at all) and loses no more than it is allowed.
-        let mut held = before.clone();
-        let r = clear_free_space(&mut held, &known, &may_hide, 0.5 * lost);
-        assert!(len(&before) - len(&held) <= 0.5 * lost, "{r:?}");
-        assert!(r.left > 0, "{r:?}");
-        // Allowed nothing, the run stays where it was.
-        let mut kept = before.clone();
-        let r = clear_free_space(&mut kept, &known, &may_hide, 0.0);
-        assert_eq!((r.found, r.runs_moved), (2, 0));
-        assert_eq!(kept, before);
     }
 }

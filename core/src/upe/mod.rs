@@ -432,13 +432,7 @@ fn run_step(
                         })
                         .is_some_and(|t| t.hides_inside(e, p))
             };
-            // Free space is weaker evidence than the rope's length: a middle
-            // run is drawn towards its chord only while it loses less than
-            // the polyline's own error.
-            let slack = input.rest_length.map_or(f64::INFINITY, |l| {
-                length::MIN_SHORTFALL_SPACINGS * length::rest_spacing(l, input.previous.len())
-            });
-            clear_free_space(&mut nodes, input.visible, &may_hide, slack)
+            clear_free_space(&mut nodes, input.visible, &may_hide)
         }
         _ => FreeSpaceReport::default(),
     };
