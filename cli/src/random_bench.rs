@@ -121,6 +121,12 @@ fn tables(
         draws.last().map_or(0, |d| d.seed),
         draws.first().map_or(0, |d| d.frames),
     );
+    // The seeds whose moved end was hidden while it moved, once for every algorithm.
+    let unseen: Vec<u64> = draws
+        .iter()
+        .filter(|d| d.moved_end_hidden())
+        .map(|d| d.seed)
+        .collect();
     for a in algorithms {
         let mine: Vec<&Row> = rows
             .iter()
@@ -131,19 +137,13 @@ fn tables(
         let frames: usize = mine.iter().map(|r| r.summary.frames).sum();
         let above: usize = mine.iter().map(|r| r.summary.frames_above_20mm).sum();
         let lost: usize = mine.iter().map(|r| r.summary.lost_frames).sum();
-        let failing = mine
+        let failing: Vec<u64> = mine
             .iter()
             .filter(|r| r.summary.frames_above_20mm > 0)
-            .count();
-        let failing_unseen = mine
-            .iter()
-            .filter(|r| r.summary.frames_above_20mm > 0)
-            .filter(|r| {
-                draws
-                    .iter()
-                    .any(|d| d.seed == r.seed && d.moved_end_hidden())
-            })
-            .count();
+            .map(|r| r.seed)
+            .collect();
+        let failing_unseen = failing.iter().filter(|s| unseen.contains(s)).count();
+        let failing = failing.len();
         let share = |k: usize| 100.0 * k as f64 / frames.max(1) as f64;
         s += &format!(
             "| {} | {} | {} | {} | {} | {} | {} | {} % | {failing} of {} ({failing_unseen}) | {} % |\n",
