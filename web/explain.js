@@ -56,7 +56,7 @@ function steps(v) {
   if (!v.previous_px.length) {
     out.push({
       name: 'initialisation', title: 'Initialisation',
-      text: `There is no previous state (status: ${v.status}): the nodes are laid along the centre line of the largest blob of the mask, ${p.node_count} nodes at equal spacing.`,
+      text: `There is no previous state (status: ${v.status}): the nodes are laid along the centre line of the largest blob of the mask, ${v.output_px.length / 2} nodes at equal spacing.`,
       draw: () => { dim(); dots(v.cloud_px, COLOURS.cloud, 1.5); nodes(v.output_px, MAIN_COLOURS.visible); },
     });
     return out;

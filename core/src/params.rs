@@ -29,8 +29,18 @@ pub const MAX_NODES: usize = 1000;
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[cfg_attr(feature = "serde", serde(default, deny_unknown_fields))]
 pub struct Params {
-    /// Number of nodes along the rope (`M`). Paper: 24.
+    /// Number of nodes along the rope (`M`), the fewest when
+    /// `node_spacing_diameters` sets it from the rope. Paper: 24.
     pub node_count: usize,
+    /// Set the node count from the rope the first initialisation finds:
+    /// nodes this many of its diameters apart (measured, or the prior's),
+    /// at least `node_count` and at most
+    /// [`crate::perception::initialisation::MAX_SPACED_NODES`]; kept for
+    /// the rest of the sequence. 0 keeps `node_count` for any rope. Shared
+    /// by every algorithm. Default 4 (a 0.3-1.5 m rope 3-20 mm thick gets
+    /// 24-48 nodes); 0 in [`Params::paper`]. See `docs/algorithm-notes.md`,
+    /// "The node count from the rope".
+    pub node_spacing_diameters: f64,
     /// Visibility radius (`r_vis`), metres. Paper: 20 mm.
     pub visibility_radius: f64,
     /// Points needed within `r_vis` for a node to be visible (`V_lim`). Paper: 3.
@@ -110,6 +120,7 @@ impl Default for Params {
     fn default() -> Self {
         Self {
             node_count: 24,
+            node_spacing_diameters: 4.0,
             visibility_radius: 0.020,
             visibility_min_points: 3,
             visibility_min_fraction: 0.5,
@@ -137,7 +148,8 @@ impl Params {
     /// The paper's tracking rules exactly (`--params paper`): visibility by
     /// `q >= V_lim` alone, Eq. 6-11 with `alpha = 0.75` for every hidden
     /// run (ends too), and nothing of this project's additions to the
-    /// tracking step, the camera's motion included (`follow_camera` off).
+    /// tracking step, the camera's motion included (`follow_camera` off),
+    /// and the paper's `M` = 24 for any rope (`node_spacing_diameters` 0).
     /// The rest of the shared pipeline (segmentation, cloud, radius,
     /// initialisation) is the same as the defaults'.
     pub fn paper() -> Self {
@@ -165,6 +177,7 @@ impl Params {
                 ..upe
             },
             follow_camera: false,
+            node_spacing_diameters: 0.0,
             ..Self::default()
         }
     }
@@ -203,6 +216,13 @@ impl Params {
             m as f64,
             (MIN_NODES..=MAX_NODES).contains(&m),
             "an integer in 4..=1000",
+        )?;
+        let k = self.node_spacing_diameters;
+        check(
+            "node_spacing_diameters",
+            k,
+            (0.0..=1000.0).contains(&k),
+            "in [0, 1000] rope diameters",
         )?;
         let r = self.visibility_radius;
         check(
@@ -302,6 +322,7 @@ impl Params {
     pub fn init(&self) -> InitSettings {
         InitSettings {
             node_count: self.node_count,
+            node_spacing_diameters: self.node_spacing_diameters,
             min_blob_pixels: self.min_blob_pixels,
             cloud: self.cloud(),
             estimate_radius: self.estimate_radius && self.dlo_radius > 0.0,

@@ -121,8 +121,15 @@ pub const PARAMETERS: &[ParamInfo] = &[
         "node_count",
         Shared,
         "M",
-        "Number of nodes along the rope",
+        "Number of nodes along the rope (the fewest, when spaced by diameters)",
         integer(4.0, 1000.0),
+    ),
+    p(
+        "node_spacing_diameters",
+        Shared,
+        "",
+        "Nodes this many rope diameters apart, from the rope found first (0: always M)",
+        number(0.0, 1000.0, 0.5),
     ),
     p(
         "visibility_radius",

@@ -48,6 +48,7 @@ impl Tracker {
             self.known_cover = init.mask_cover;
             self.known_diameter = init.diameter();
             self.rest_length = Some(rest_length(polyline_length(&init.nodes), self.radius()));
+            self.rope_node_count = Some(init.nodes.len());
         }
         // The cloud left out parts too wide for the old state's rope: the
         // new nodes are judged against the whole mask's.

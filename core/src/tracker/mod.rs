@@ -8,7 +8,7 @@ use alloc::vec::Vec;
 use crate::baselines::trackdlo::TrackDloReport;
 use crate::math::{self, Vec2, Vec3};
 use crate::motion::RigidMotion;
-use crate::params::{Params, ParamsError};
+use crate::params::{Params, ParamsError, MAX_NODES, MIN_NODES};
 use crate::perception::camera::{
     is_frame_rate, CameraError, CameraIntrinsics, DEFAULT_FPS, MAX_FPS,
 };
@@ -16,8 +16,8 @@ use crate::perception::ego_motion::CameraMotion;
 use crate::perception::evidence::Evidence;
 use crate::perception::frame::{Frame, FrameError};
 use crate::perception::initialisation::{
-    initialise, strip_push, InitError, InitGuide, InitReport, Initialisation, PriorError,
-    RopePrior, DIAMETER_PRIOR_FACTOR,
+    initialise, node_count_for, strip_push, InitError, InitGuide, InitReport, Initialisation,
+    PriorError, RopePrior, DIAMETER_PRIOR_FACTOR,
 };
 use crate::perception::point_cloud::build_cloud;
 use crate::perception::segmentation::{
@@ -249,6 +249,8 @@ pub struct TrackerSnapshot {
     #[cfg_attr(feature = "serde", serde(default))]
     rest_length: Option<f64>,
     #[cfg_attr(feature = "serde", serde(default))]
+    rope_node_count: Option<usize>,
+    #[cfg_attr(feature = "serde", serde(default))]
     refused_jump_cloud: Option<usize>,
     #[cfg_attr(feature = "serde", serde(default))]
     recovery: RecoveryBackoff,
@@ -275,6 +277,9 @@ pub struct Tracker {
     /// Length of the node polyline at the first initialisation, metres
     /// (chords, as the tracked nodes measure it).
     rest_length: Option<f64>,
+    /// The node count the first initialisation chose for this rope
+    /// (`Params::node_spacing_diameters`), kept until a reset.
+    rope_node_count: Option<usize>,
     /// Cloud size at the last refused jump re-initialisation, while fewer
     /// than `reinit_visible_fraction` of the nodes stay visible.
     refused_jump_cloud: Option<usize>,
@@ -312,6 +317,7 @@ impl Tracker {
             known_cover: None,
             known_diameter: None,
             rest_length: None,
+            rope_node_count: None,
             refused_jump_cloud: None,
             recovery: RecoveryBackoff::default(),
             stepper: Stepper::new(params.algorithm),
@@ -452,9 +458,16 @@ impl Tracker {
     pub fn set_params(&mut self, params: Params) -> Result<(), TrackerError> {
         params.validate()?;
         let mut restart = params.algorithm != self.params.algorithm;
+        let counted = |p: &Params| (p.node_count, p.node_spacing_diameters);
+        if counted(&params) != counted(&self.params) {
+            self.rope_node_count = self
+                .rest_length
+                .map(|l| node_count_for(&params.init(), l, self.rope_diameter()));
+        }
+        let m = self.rope_node_count.unwrap_or(params.node_count);
         if let Some(state) = self.state.as_mut() {
-            if state.nodes.len() != params.node_count {
-                state.nodes = resample_uniform(&state.nodes, params.node_count);
+            if state.nodes.len() != m {
+                state.nodes = resample_uniform(&state.nodes, m);
                 restart = true;
             }
         }
@@ -484,6 +497,7 @@ impl Tracker {
             known_cover: self.known_cover,
             known_diameter: self.known_diameter,
             rest_length: self.rest_length,
+            rope_node_count: self.rope_node_count,
             refused_jump_cloud: self.refused_jump_cloud,
             recovery: self.recovery,
             stepper: self.stepper.clone(),
@@ -515,10 +529,17 @@ impl Tracker {
         if snapshot.known_cover.is_some_and(|c| !(c > 0.0 && c <= 1.0)) {
             return bad("the share of the rope's width its mask covers is not in (0, 1]");
         }
+        if snapshot
+            .rope_node_count
+            .is_some_and(|m| !(MIN_NODES..=MAX_NODES).contains(&m))
+        {
+            return bad("the rope's node count is outside the accepted range");
+        }
         let mut restart = snapshot.stepper.algorithm() != self.params.algorithm;
+        let m = snapshot.rope_node_count.unwrap_or(self.params.node_count);
         self.state = snapshot.state.map(|mut s| {
-            if s.nodes.len() != self.params.node_count && !s.nodes.is_empty() {
-                s.nodes = resample_uniform(&s.nodes, self.params.node_count);
+            if s.nodes.len() != m && !s.nodes.is_empty() {
+                s.nodes = resample_uniform(&s.nodes, m);
                 restart = true;
             }
             s
@@ -528,6 +549,7 @@ impl Tracker {
         self.known_cover = snapshot.known_cover;
         self.known_diameter = snapshot.known_diameter;
         self.rest_length = snapshot.rest_length;
+        self.rope_node_count = snapshot.rope_node_count;
         self.refused_jump_cloud = snapshot.refused_jump_cloud;
         self.recovery = snapshot.recovery;
         self.stepper = snapshot.stepper;
@@ -547,6 +569,7 @@ impl Tracker {
         self.known_cover = None;
         self.known_diameter = None;
         self.rest_length = None;
+        self.rope_node_count = None;
         self.refused_jump_cloud = None;
         self.recovery = RecoveryBackoff::default();
         self.stepper = Stepper::new(self.params.algorithm);
@@ -614,6 +637,21 @@ impl Tracker {
             (true, Some(r)) if self.params.dlo_radius > 0.0 => r,
             _ => self.params.dlo_radius,
         }
+    }
+
+    /// The rope's whole diameter, metres, when known: the prior's, or the
+    /// first initialisation's measured strip over the share of the width
+    /// its mask covered.
+    fn rope_diameter(&self) -> Option<f64> {
+        self.prior.diameter.or(self
+            .known_radius
+            .map(|r| 2.0 * r / self.known_cover.unwrap_or(1.0)))
+    }
+
+    /// The number of nodes tracked: the one the first initialisation chose
+    /// for this rope, else `Params::node_count`.
+    pub fn node_count(&self) -> usize {
+        self.rope_node_count.unwrap_or(self.params.node_count)
     }
 
     /// The cloud's settings: pushed from the surface the mask sees to the
@@ -839,7 +877,13 @@ impl Tracker {
             min_length: known.map_or(0.0, |k| fraction * k),
             taken,
         };
-        let init = initialise(frame, mask, &self.camera, &self.params.init(), &guide)
+        // A re-initialisation places the rope's nodes, as many as before.
+        let mut settings = self.params.init();
+        if let Some(m) = self.rope_node_count {
+            settings.node_count = m;
+            settings.node_spacing_diameters = 0.0;
+        }
+        let init = initialise(frame, mask, &self.camera, &settings, &guide)
             .map_err(ReinitFailure::Init)?;
         if let Some(known) = known {
             if init.length < fraction * known || (lost && !self.as_thick_as_tracked(&init)) {
@@ -1041,6 +1085,17 @@ mod tests {
         let mut fine = t.snapshot();
         fine.known_cover = Some(0.8);
         t.restore(fine).expect("a cover in (0, 1]");
+        // A node count outside the accepted range would resample to it.
+        for count in [0, 2, MAX_NODES + 1] {
+            let mut bad = t.snapshot();
+            bad.rope_node_count = Some(count);
+            assert!(t.restore(bad).is_err(), "{count} nodes");
+        }
+        let mut fine = t.snapshot();
+        fine.rope_node_count = Some(30);
+        t.restore(fine).expect("30 nodes");
+        assert_eq!(t.nodes().len(), 30);
+        assert_eq!(t.node_count(), 30);
     }
 
     #[test]

@@ -257,8 +257,13 @@ fn mask_half_width_px(blob_pixels: usize, path: &[Vec2]) -> f64 {
 /// What initialisation needs from the parameters.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct InitSettings {
-    /// Nodes to place (`M`).
+    /// Nodes to place (`M`); the fewest when `node_spacing_diameters` sets
+    /// the count from the rope found.
     pub node_count: usize,
+    /// Nodes this many of the rope's diameters apart, when its diameter is
+    /// known (the prior's, or measured with `estimate_radius`): see
+    /// [`node_count_for`]. 0 places `node_count` whatever the rope.
+    pub node_spacing_diameters: f64,
     /// Fewest mask pixels taken as the rope.
     pub min_blob_pixels: u32,
     /// Depth range and the surface-to-axis push of the 3D lift.
@@ -444,6 +449,37 @@ pub fn find_centre_line(mask: &Mask, min_blob_pixels: u32) -> Result<Vec<Vec2>, 
     Ok(path)
 }
 
+/// Most nodes [`node_count_for`] places: every per-frame cost grows with
+/// the count, and twice the paper's `M` = 24 already resolves bends a few
+/// centimetres across on a 1.5 m rope (31 mm apart).
+pub const MAX_SPACED_NODES: usize = 48;
+
+/// The node count for a rope `length` long and `diameter` thick:
+/// `round(L / (k d)) + 1` nodes for `k = node_spacing_diameters`, between
+/// `node_count` and [`MAX_SPACED_NODES`] (`node_count` when it is larger,
+/// `k` is 0 or the diameter unknown). A fixed count spaces a 1.5 m rope's
+/// nodes five times as far apart as a 0.3 m rope's, and a polyline cuts
+/// each bend by a share of its spacing squared; the spacing cannot fall
+/// far below the rope's width either, or EM's round Gaussians settle on
+/// either side of the axis in turn and the polyline zigzags
+/// (`docs/algorithm-notes.md`, "The node count from the rope").
+pub fn node_count_for(settings: &InitSettings, length: f64, diameter: Option<f64>) -> usize {
+    let least = settings.node_count;
+    let k = settings.node_spacing_diameters;
+    let Some(d) = diameter.filter(|d| *d > 0.0 && d.is_finite()) else {
+        return least;
+    };
+    if !(k > 0.0) || !(length > 0.0) || !length.is_finite() {
+        return least;
+    }
+    let spaced = (length / (k * d)).round() + 1.0;
+    if spaced <= least as f64 {
+        least
+    } else {
+        (spaced.min(MAX_SPACED_NODES as f64) as usize).max(least)
+    }
+}
+
 /// The whole stage: candidates, the choice, the 3D lift, even placement of `M` nodes.
 pub fn initialise(
     frame: &Frame<'_>,
@@ -524,8 +560,15 @@ pub fn initialise(
         hint_missed,
         prior_length_ratio: guide.prior.length.map(|l| length / l),
     };
+    // The rope's whole diameter: a prior's, or the measured strip's over
+    // the share of the width it covers.
+    let diameter = guide
+        .prior
+        .diameter
+        .or(radius.map(|r| 2.0 * r / cover.unwrap_or(1.0)));
+    let count = node_count_for(settings, length, diameter);
     Ok(Initialisation {
-        nodes: resample_uniform(&line, settings.node_count),
+        nodes: resample_uniform(&line, count),
         length,
         radius,
         mask_cover: cover,
@@ -537,6 +580,41 @@ pub fn initialise(
 mod tests {
     use super::*;
     use alloc::vec;
+
+    #[test]
+    fn the_node_count_spaces_nodes_by_the_ropes_diameter_within_its_bounds() {
+        let spaced = InitSettings {
+            node_spacing_diameters: 4.0,
+            ..crate::Params::default().init()
+        };
+        // 1.2 m, 10 mm thick: 40 mm apart, 31 nodes.
+        assert_eq!(node_count_for(&spaced, 1.2, Some(0.010)), 31);
+        // A short thick rope keeps the least count; a long thread the most.
+        assert_eq!(node_count_for(&spaced, 0.3, Some(0.020)), 24);
+        assert_eq!(node_count_for(&spaced, 1.5, Some(0.003)), MAX_SPACED_NODES);
+        // Unknown diameter, spacing off, or a bad length: the fixed count.
+        let fixed = InitSettings {
+            node_spacing_diameters: 0.0,
+            ..spaced
+        };
+        assert_eq!(node_count_for(&fixed, 1.2, Some(0.010)), 24);
+        for (length, diameter) in [
+            (1.2, None),
+            (f64::NAN, Some(0.01)),
+            (1.2, Some(f64::NAN)),
+            (-1.0, Some(0.01)),
+            (f64::INFINITY, Some(0.01)),
+            (1.2, Some(0.0)),
+        ] {
+            assert_eq!(node_count_for(&spaced, length, diameter), 24);
+        }
+        // A least count above the cap stands.
+        let many = InitSettings {
+            node_count: 100,
+            ..spaced
+        };
+        assert_eq!(node_count_for(&many, 1.5, Some(0.003)), 100);
+    }
 
     #[test]
     fn a_candidate_along_a_tracked_rope_is_taken_and_one_crossing_it_is_not() {
