@@ -122,8 +122,12 @@ impl Evidence<'_> {
     /// camera is 1.2 cm nearer 2 cm up the image): each pixel is paired
     /// with the one opposite, whose depths sum, on any plane, to twice the
     /// plane's depth at the centre, there a radius behind `p`; a pair whose
-    /// sum falls short of that by the margin has something in front. Rope
-    /// pixels and pixels without depth say nothing.
+    /// sum falls short of that by the margin has something in front, when
+    /// one of the two also lies in front of `p` by the margin: a thick
+    /// rope's own edge, outside its mask, is a diameter nearer than the
+    /// table but not nearer than the rope (`docs/algorithm-notes.md`, "A
+    /// rope's own edge beside an end that came out"). Rope pixels and
+    /// pixels without depth say nothing.
     pub fn hidden_around(&self, p: &Vec3, reach: f64) -> bool {
         let Some(q) = self.camera.project(p) else {
             return false;
@@ -159,7 +163,9 @@ impl Evidence<'_> {
                     return true;
                 }
                 match (depth(one), depth(other)) {
-                    (Some(a), Some(b)) => a + b < table_sum - OCCLUDER_MARGIN,
+                    (Some(a), Some(b)) => {
+                        a + b < table_sum - OCCLUDER_MARGIN && a.min(b) < p.z - OCCLUDER_MARGIN
+                    }
                     _ => false,
                 }
             })
@@ -677,5 +683,39 @@ mod tests {
         assert!(!e.hidden_around(&Vec3::new(0.0, 0.0, -0.5), 0.06));
         assert!(!e.hidden_around(&p, 0.0));
         assert!(!e.hidden_around(&p, f64::NAN));
+    }
+    #[test]
+    fn a_thick_rope_s_own_edge_outside_its_mask_does_not_hide_its_tip() {
+        // A table at 0.6 m; a rope 16 mm thick along column 40 from row 40
+        // down, its top 0.584 m away over columns 37-43 but its mask only
+        // columns 39-41 (a shaded edge out of the colour range). Its tip's
+        // point at (40, 40) lies on the end's cap, at the axis' depth.
+        let mut t = Table::new(80, 80, 100.0, 600);
+        for v in 40..80 {
+            for u in 37..=43 {
+                t.depth[v * 80 + u] = 584;
+            }
+            for u in 39..=41 {
+                t.mask.data[v * 80 + u] = true;
+            }
+        }
+        let tip = t.at(40.0, 40.0, 0.592);
+        let f = t.frame();
+        let e = t.evidence(&f, &[], 0.008);
+        // 2 cm round it: its own edges, and open table beyond the tip.
+        assert!(!e.hidden_around(&tip, 0.02));
+        // A box 2 cm above the table beside it does hide.
+        let mut boxed = Table {
+            depth: t.depth.clone(),
+            mask: t.mask.clone(),
+            ..Table::new(80, 80, 100.0, 600)
+        };
+        for v in 30..50 {
+            for u in 42..60 {
+                boxed.depth[v * 80 + u] = 580;
+            }
+        }
+        let f = boxed.frame();
+        assert!(boxed.evidence(&f, &[], 0.008).hidden_around(&tip, 0.02));
     }
 }

@@ -472,7 +472,7 @@ pub fn node_count_for(settings: &InitSettings, length: f64, diameter: Option<f64
     if !(k > 0.0) || !(length > 0.0) || !length.is_finite() {
         return least;
     }
-    let spaced = (length / (k * d)).round() + 1.0;
+    let spaced = libm::round(length / (k * d)) + 1.0;
     if spaced <= least as f64 {
         least
     } else {
