@@ -56,7 +56,7 @@ function steps(v) {
   if (!v.previous_px.length) {
     out.push({
       name: 'initialisation', title: 'Initialisation',
-      text: `There is no previous state (status: ${v.status}): the nodes are laid along the centre line of the largest blob of the mask, ${v.output_px.length / 2} nodes at equal spacing.`,
+      text: `There is no previous state (status: ${v.status}): the nodes are laid along the centre line of the rope-shaped candidate taken (the one clicked, the one nearest the last state, or the longest; with several, the message above the image says which and why), ${v.output_px.length / 2} nodes at equal spacing${p.node_spacing_diameters > 0 ? `: as many as put them ${fmt(p.node_spacing_diameters, 1)} of the rope's diameters apart, at least M = ${p.node_count} and at most 48 (this project's addition; kept for the sequence)` : ''}.`,
       draw: () => { dim(); dots(v.cloud_px, COLOURS.cloud, 1.5); nodes(v.output_px, MAIN_COLOURS.visible); },
     });
     return out;

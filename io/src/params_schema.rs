@@ -127,7 +127,7 @@ pub const PARAMETERS: &[ParamInfo] = &[
     p(
         "node_spacing_diameters",
         Shared,
-        "",
+        "s/d",
         "Nodes this many rope diameters apart, from the rope found first (0: always M)",
         number(0.0, 1000.0, 0.5),
     ),
