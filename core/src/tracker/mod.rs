@@ -1025,6 +1025,16 @@ mod tests {
         t.restore(fine).expect("30 nodes");
         assert_eq!(t.nodes().len(), 30);
         assert_eq!(t.node_count(), 30);
+        // With the rule turned off since, the parameters' count.
+        let fixed = Params {
+            node_spacing_diameters: 0.0,
+            ..Params::default()
+        };
+        t.set_params(fixed).expect("params");
+        let mut earlier = t.snapshot();
+        earlier.rope_node_count = Some(30);
+        t.restore(earlier).expect("30 nodes");
+        assert_eq!((t.nodes().len(), t.node_count()), (24, 24));
     }
 
     #[test]

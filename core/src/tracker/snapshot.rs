@@ -24,8 +24,10 @@ impl Tracker {
         }
     }
 
-    /// Goes back to a state taken by [`Tracker::snapshot`]. A snapshot with
-    /// another node count is resampled to the current one; one taken with
+    /// Goes back to a state taken by [`Tracker::snapshot`]. Its nodes are
+    /// resampled to the count in force: the rope's count the snapshot
+    /// carries while `Params::node_spacing_diameters` sets counts (at least
+    /// `Params::node_count`), else `Params::node_count`. One taken with
     /// another node count or algorithm, or whose step state does not fit its
     /// nodes, starts the step afresh. A snapshot with non-finite nodes or
     /// lengths is refused and the tracker left as it was.
@@ -56,7 +58,12 @@ impl Tracker {
             return bad("the rope's node count is outside the accepted range");
         }
         let mut restart = snapshot.stepper.algorithm() != self.params.algorithm;
-        let m = snapshot.rope_node_count.unwrap_or(self.params.node_count);
+        // The parameters may have changed since (the page's panel).
+        let rope = snapshot
+            .rope_node_count
+            .filter(|_| self.params.node_spacing_diameters > 0.0)
+            .map(|m| m.max(self.params.node_count));
+        let m = rope.unwrap_or(self.params.node_count);
         self.state = snapshot.state.map(|mut s| {
             if s.nodes.len() != m && !s.nodes.is_empty() {
                 s.nodes = resample_uniform(&s.nodes, m);
@@ -69,7 +76,7 @@ impl Tracker {
         self.known_cover = snapshot.known_cover;
         self.known_diameter = snapshot.known_diameter;
         self.rest_length = snapshot.rest_length;
-        self.rope_node_count = snapshot.rope_node_count;
+        self.rope_node_count = rope;
         self.refused_jump_cloud = snapshot.refused_jump_cloud;
         self.recovery = snapshot.recovery;
         self.stepper = snapshot.stepper;
