@@ -14,7 +14,7 @@ use upetrack_synth::{RenderSettings, Scenario, ScenarioKind, Variant};
 
 mod common;
 use common::scenes::{each_frame, max, mean};
-use common::{frame_errors, run, written_drawn_scene};
+use common::{each_tracked_frame, frame_errors, run, written_drawn_scene};
 
 /// The candidate taken on the first frame, the true length there, and
 /// every frame's error in millimetres.
@@ -347,21 +347,15 @@ fn re_initialised_with_a_third_hidden(params: Params) -> ReInitialised {
 #[test]
 fn a_long_thin_rope_is_not_cut_short_at_its_bends() {
     let (seq, truth) = written_drawn_scene(1075, 16);
+    // Per frame: the error (mm), the length over the true one, the nodes.
     let track = |params: Params| {
-        let mut tracker = Tracker::new(params, seq.camera, seq.hsv).expect("tracker");
-        let (mut errors, mut shortest, mut count) = (Vec::new(), f64::INFINITY, 0);
-        for k in 0..seq.groundtruth.len() {
-            let decoded = seq.frame(k).expect("frame");
-            let frame = decoded.frame(seq.depth_scale).expect("frame");
-            let out = tracker
-                .process(&frame, &seq.occlusions_at(k))
-                .expect("frame");
-            let truth_k = seq.groundtruth[k].as_ref().expect("ground truth");
-            let error = upetrack::metrics::frame_error(&out.nodes, truth_k).expect("error");
-            errors.push(error * 1000.0);
-            shortest = shortest.min(polyline_length(&out.nodes) / truth);
-            count = out.nodes.len();
-        }
+        let frames = each_tracked_frame(&seq, params, |nodes, centre| {
+            let error = upetrack::metrics::frame_error(nodes, centre).expect("error");
+            (error * 1000.0, polyline_length(nodes) / truth, nodes.len())
+        });
+        let errors: Vec<f64> = frames.iter().map(|f| f.0).collect();
+        let shortest = frames.iter().map(|f| f.1).fold(f64::INFINITY, f64::min);
+        let count = frames.last().map_or(0, |f| f.2);
         (mean(&errors), shortest, count)
     };
     let fixed = Params {

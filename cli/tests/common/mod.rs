@@ -4,6 +4,7 @@
 
 use std::path::PathBuf;
 
+use upetrack::math::Vec3;
 use upetrack::{Params, Tracker};
 use upetrack_io::{FolderSource, Sequence};
 
@@ -77,6 +78,18 @@ pub fn frame_errors(seq: &Sequence<FolderSource>) -> Vec<f64> {
 
 /// Every frame's error (mm) of `seq` tracked with `params` from its files.
 pub fn frame_errors_with(seq: &Sequence<FolderSource>, params: Params) -> Vec<f64> {
+    each_tracked_frame(seq, params, |nodes, truth| {
+        upetrack::metrics::frame_error(nodes, truth).expect("error") * 1000.0
+    })
+}
+
+/// `measure(nodes, true centre line)` of every frame of `seq` tracked with
+/// `params` from its files.
+pub fn each_tracked_frame<T>(
+    seq: &Sequence<FolderSource>,
+    params: Params,
+    mut measure: impl FnMut(&[Vec3], &[Vec3]) -> T,
+) -> Vec<T> {
     let mut tracker = Tracker::new(params, seq.camera, seq.hsv).expect("tracker");
     (0..seq.groundtruth.len())
         .map(|k| {
@@ -86,7 +99,7 @@ pub fn frame_errors_with(seq: &Sequence<FolderSource>, params: Params) -> Vec<f6
                 .process(&frame, &seq.occlusions_at(k))
                 .expect("frame");
             let truth = seq.groundtruth[k].as_ref().expect("ground truth");
-            upetrack::metrics::frame_error(&out.nodes, truth).expect("error") * 1000.0
+            measure(&out.nodes, truth)
         })
         .collect()
 }

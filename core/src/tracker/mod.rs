@@ -16,8 +16,8 @@ use crate::perception::ego_motion::CameraMotion;
 use crate::perception::evidence::Evidence;
 use crate::perception::frame::{Frame, FrameError};
 use crate::perception::initialisation::{
-    initialise, node_count_for, strip_push, InitError, InitGuide, InitReport, Initialisation,
-    PriorError, RopePrior, DIAMETER_PRIOR_FACTOR,
+    initialise, node_count_for, strip_push, whole_diameter, InitError, InitGuide, InitReport,
+    Initialisation, PriorError, RopePrior, DIAMETER_PRIOR_FACTOR,
 };
 use crate::perception::point_cloud::build_cloud;
 use crate::perception::segmentation::{
@@ -568,12 +568,9 @@ impl Tracker {
     }
 
     /// The rope's whole diameter, metres, when known: the prior's, or the
-    /// first initialisation's measured strip over the share of the width
-    /// its mask covered.
+    /// first initialisation's measure.
     fn rope_diameter(&self) -> Option<f64> {
-        self.prior.diameter.or(self
-            .known_radius
-            .map(|r| 2.0 * r / self.known_cover.unwrap_or(1.0)))
+        whole_diameter(self.prior.diameter, self.known_radius, self.known_cover)
     }
 
     /// The number of nodes tracked: the one the first initialisation chose
@@ -1005,20 +1002,28 @@ mod tests {
         let mut bad = t.snapshot();
         bad.known_length = Some(f64::INFINITY);
         assert!(t.restore(bad).is_err());
+        // The tracker's snapshot with `edit` made, refused by a restore.
+        let refused = |t: &mut Tracker, edit: &dyn Fn(&mut TrackerSnapshot)| {
+            let mut bad = t.snapshot();
+            edit(&mut bad);
+            t.restore(bad).is_err()
+        };
         // A cover of nothing would push the cloud infinitely far.
         for cover in [0.0, -0.5, 1.5, f64::NAN] {
-            let mut bad = t.snapshot();
-            bad.known_cover = Some(cover);
-            assert!(t.restore(bad).is_err(), "cover {cover}");
+            assert!(
+                refused(&mut t, &|s| s.known_cover = Some(cover)),
+                "cover {cover}"
+            );
         }
         let mut fine = t.snapshot();
         fine.known_cover = Some(0.8);
         t.restore(fine).expect("a cover in (0, 1]");
         // A node count outside the accepted range would resample to it.
         for count in [0, 2, MAX_NODES + 1] {
-            let mut bad = t.snapshot();
-            bad.rope_node_count = Some(count);
-            assert!(t.restore(bad).is_err(), "{count} nodes");
+            assert!(
+                refused(&mut t, &|s| s.rope_node_count = Some(count)),
+                "{count} nodes"
+            );
         }
         let mut fine = t.snapshot();
         fine.rope_node_count = Some(30);

@@ -473,11 +473,18 @@ pub fn node_count_for(settings: &InitSettings, length: f64, diameter: Option<f64
         return least;
     }
     let spaced = libm::round(length / (k * d)) + 1.0;
-    if spaced <= least as f64 {
-        least
-    } else {
-        (spaced.min(MAX_SPACED_NODES as f64) as usize).max(least)
-    }
+    (spaced.min(MAX_SPACED_NODES as f64) as usize).max(least)
+}
+
+/// The rope's whole diameter, metres, when known: the prior's, else the
+/// measured `mask_radius` (the strip its mask covers) over the share
+/// `cover` of the width that strip is.
+pub fn whole_diameter(
+    prior: Option<f64>,
+    mask_radius: Option<f64>,
+    cover: Option<f64>,
+) -> Option<f64> {
+    prior.or(mask_radius.map(|r| 2.0 * r / cover.unwrap_or(1.0)))
 }
 
 /// The whole stage: candidates, the choice, the 3D lift, even placement of `M` nodes.
@@ -560,12 +567,7 @@ pub fn initialise(
         hint_missed,
         prior_length_ratio: guide.prior.length.map(|l| length / l),
     };
-    // The rope's whole diameter: a prior's, or the measured strip's over
-    // the share of the width it covers.
-    let diameter = guide
-        .prior
-        .diameter
-        .or(radius.map(|r| 2.0 * r / cover.unwrap_or(1.0)));
+    let diameter = whole_diameter(guide.prior.diameter, radius, cover);
     let count = node_count_for(settings, length, diameter);
     Ok(Initialisation {
         nodes: resample_uniform(&line, count),
