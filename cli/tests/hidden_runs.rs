@@ -106,9 +106,12 @@ fn a_rope_pulled_through_an_occluder_keeps_its_length_and_tightens_the_hidden_be
         mean(&grown),
         mean(&trackdlo)
     );
-    assert!(max(&lengths) < 0.04, "{:.3}", max(&lengths));
+    // Within issue 28's 3 % on every frame: 1.2 % since a run gives up
+    // what a seen pull slid out of it on each frame; 3.1 % when it waited
+    // for half a spacing of excess, which this bound refuses.
+    assert!(max(&lengths) < 0.02, "{:.3}", max(&lengths));
     // Straightened from the pulled arm (session 42): 1.68 mm against 3.85
-    // off and 5.47 for TrackDLO; scaled as a whole towards the chord it
+    // off and 5.47 for TrackDLO (1.49 mm since session 57's pull); scaled as a whole towards the chord it
     // was 3.10, which these bounds refuse.
     assert!(mean(&kept) < 0.6 * mean(&grown));
     assert!(mean(&kept) < 0.4 * mean(&trackdlo));

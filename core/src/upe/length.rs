@@ -436,8 +436,12 @@ fn length_of(mut points: impl Iterator<Item = Vec3>) -> f64 {
 /// monotonically with it (a sum of norms of affine functions is convex,
 /// and least at the chord, the shortest path), so a bisection finds it.
 /// A run asked for less than its chord is laid on the chord. An excess
-/// under [`MIN_SHORTFALL_SPACINGS`] node spacings is left (noise), and so
-/// is a rope shorter than its rest length: a polyline of `M` nodes cuts
+/// under [`MIN_SHORTFALL_SPACINGS`] node spacings may be the rest length's
+/// or the visible rope's own error: a run gives up that much only where
+/// a pull is seen, and at most the length its pulled tip moved out beyond
+/// the other since `previous` (rope slid out of the run on this frame),
+/// so a rope pulled through keeps its length frame by frame instead of in
+/// steps of half a spacing. A rope shorter than its rest length is left: a polyline of `M` nodes cuts
 /// every bend, so falling short is no evidence that the hidden bend holds
 /// more (opening bends to make up the difference moved them off the rope
 /// on the tuning range).
@@ -466,14 +470,27 @@ pub fn conserve_middle_lengths(
     }
     let budget = rest_length - (polyline_length(nodes) - hidden);
     let spacing = rest_length / (m - 1) as f64;
-    if hidden - budget < MIN_SHORTFALL_SPACINGS * spacing {
+    let excess = hidden - budget;
+    let whole = excess >= MIN_SHORTFALL_SPACINGS * spacing;
+    if !(excess > 0.0) {
         return report;
     }
-    for (run, old) in middle.iter().zip(&lengths) {
-        let target = (budget * old / hidden).max(0.0);
+    // Read before any run moves: each run's pull is from its own stretches.
+    let pulls: Vec<Option<Pull>> = middle
+        .iter()
+        .map(|run| pulled_side(nodes, known, previous, *run))
+        .collect();
+    for ((run, old), pull) in middle.iter().zip(&lengths).zip(&pulls) {
+        let share = excess * old / hidden;
+        let give = match (whole, pull) {
+            (true, _) => share,
+            (false, Some(pull)) => share.min(pull.slid_out),
+            (false, None) => continue,
+        };
+        let target = (old - give).max(0.0);
         let curve = nodes[run.start - 1..=run.end].to_vec();
-        let placed = match pulled_side(nodes, known, previous, *run) {
-            Some(side) => taut_spread(&curve, target, side),
+        let placed = match pull {
+            Some(pull) => taut_spread(&curve, target, pull.side),
             None => scaled_towards_chord(&curve, *old, target),
         };
         if !placed.iter().all(math::is_finite) {
@@ -523,13 +540,24 @@ enum Side {
     End,
 }
 
+/// A pull on a hidden run from one of its visible stretches.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Pull {
+    /// The anchor the rope is pulled from.
+    side: Side,
+    /// How much farther that stretch's tip moved out than the other's
+    /// (the other's inward move not counted), metres: the rope slid out of
+    /// the run since the previous frame.
+    slid_out: f64,
+}
+
 /// The side of `run` whose visible stretch was pulled away from it since
-/// `previous` more than the other, when one was: the move of the stretch's
+/// `previous` more than the other, when one was, and by how much more: the move of the stretch's
 /// far node (the rope's tip, where the stretch reaches it) along the rope,
 /// outwards. Along a straight stretch the nodes slide as EM parameterises
 /// the points, so their mean move shows nothing of a pull along the rope;
 /// a tip shows it.
-fn pulled_side(nodes: &[Vec3], known: &[bool], previous: &[Vec3], run: HiddenRun) -> Option<Side> {
+fn pulled_side(nodes: &[Vec3], known: &[bool], previous: &[Vec3], run: HiddenRun) -> Option<Pull> {
     let m = nodes.len();
     if previous.len() != m {
         return None;
@@ -543,8 +571,14 @@ fn pulled_side(nodes: &[Vec3], known: &[bool], previous: &[Vec3], run: HiddenRun
         outwards(&nodes[tip], &nodes[inner]).map(|out| (nodes[tip] - previous[tip]).dot(&out))
     };
     match (pull(start_tip, start_tip + 1), pull(end_tip, end_tip - 1)) {
-        (Some(s), Some(e)) if e > 0.0 && e > s => Some(Side::End),
-        (Some(s), Some(e)) if s > 0.0 && s > e => Some(Side::Start),
+        (Some(s), Some(e)) if e > 0.0 && e > s => Some(Pull {
+            side: Side::End,
+            slid_out: e - s.max(0.0),
+        }),
+        (Some(s), Some(e)) if s > 0.0 && s > e => Some(Pull {
+            side: Side::Start,
+            slid_out: s - e.max(0.0),
+        }),
         _ => None,
     }
 }
@@ -1026,18 +1060,25 @@ mod tests {
         previous[0] += out_start * 0.005;
         previous[20] -= out_end * 0.01;
         let run = HiddenRun { start: 6, end: 15 };
-        assert_eq!(
-            pulled_side(&before, &known, &previous, run),
-            Some(Side::End)
-        );
+        let side = |pull: Option<Pull>| pull.map(|p| p.side);
+        let pull = pulled_side(&before, &known, &previous, run);
+        assert_eq!(side(pull), Some(Side::End));
+        // The other tip went in: only the pulled tip's 1 cm slid out.
+        assert!((pull.map_or(0.0, |p| p.slid_out) - 0.01).abs() < 1e-12);
         // A stretch between two runs has no tip: its node farthest from the run.
         let mut known = known;
         known[18] = false;
         previous[17] -= out_end * 0.02;
         assert_eq!(
-            pulled_side(&before, &known, &previous, run),
+            side(pulled_side(&before, &known, &previous, run)),
             Some(Side::End)
         );
+        // Both tips out (the bend carried along): only the difference slid out.
+        previous[0] = before[0] - out_start * 0.015;
+        let both = pulled_side(&before, &known, &previous, run);
+        assert_eq!(side(both), Some(Side::End));
+        assert!((both.map_or(0.0, |p| p.slid_out) - 0.005).abs() < 1e-12);
+        previous[0] = before[0] + out_start * 0.005;
         previous[17] = before[17];
         assert_eq!(pulled_side(&before, &known, &previous, run), None);
     }
@@ -1065,6 +1106,42 @@ mod tests {
             0
         );
         assert_eq!(fed, before);
+    }
+
+    /// Regression for "the pulled-through rope grows in steps of half a
+    /// spacing": an excess under `MIN_SHORTFALL_SPACINGS` was left until it
+    /// passed the threshold, so the rope pulled through grew 2-3 % and
+    /// snapped back (`pulled-through`: 3.3 % at worst). With a pull seen,
+    /// the run gives up what slid out on this frame, at most the excess.
+    #[test]
+    fn a_small_excess_is_given_up_as_far_as_the_rope_was_seen_to_slide_out() {
+        let before = hairpin(21, 7, 0.06, 0.04);
+        let known: Vec<bool> = (0..21).map(|i| !(6..15).contains(&i)).collect();
+        let total = polyline_length(&before);
+        let spacing = total / 20.0;
+        let rest = total - 0.3 * spacing;
+        let out_end = (before[20] - before[19]).normalize();
+        let pulled_by = |slid: f64| {
+            let mut previous = before.clone();
+            previous[20] -= out_end * slid;
+            let mut nodes = before.clone();
+            conserve_middle_lengths(&mut nodes, &known, &previous, rest);
+            polyline_length(&nodes)
+        };
+        // Pulled 2 mm: the run gives up those 2 mm of the excess (0.3 of a
+        // spacing, 3.7 mm), and a little more where its nodes, spread
+        // evenly, cut the new corner of this tight hairpin.
+        let (little, far) = (pulled_by(0.002), pulled_by(0.05));
+        assert!(little < total - 0.002 + 1e-9, "{little} of {total}");
+        // Pulled farther than the excess: down to the rest length.
+        assert!(
+            far < rest + 1e-9 && far < little - 0.001,
+            "{far} / {little}"
+        );
+        // No pull seen: the small excess stays (noise).
+        let mut resting = before.clone();
+        conserve_middle_lengths(&mut resting, &known, &before, rest);
+        assert_eq!(resting, before);
     }
 
     #[test]
