@@ -487,6 +487,9 @@ pub fn conserve_middle_lengths(
             (false, Some(pull)) => share.min(pull.slid_out),
             (false, None) => continue,
         };
+        if !(give > 0.0) {
+            continue;
+        }
         let target = (old - give).max(0.0);
         let curve = nodes[run.start - 1..=run.end].to_vec();
         let placed = match pull {
@@ -545,9 +548,9 @@ enum Side {
 struct Pull {
     /// The anchor the rope is pulled from.
     side: Side,
-    /// How much farther that stretch's tip moved out than the other's
-    /// (the other's inward move not counted), metres: the rope slid out of
-    /// the run since the previous frame.
+    /// The rope that left the run since the previous frame, metres: the
+    /// pulled stretch's tip's move out less the other tip's move, out (the
+    /// bend carried along) or in (rope that went into the run there).
     slid_out: f64,
 }
 
@@ -573,11 +576,11 @@ fn pulled_side(nodes: &[Vec3], known: &[bool], previous: &[Vec3], run: HiddenRun
     match (pull(start_tip, start_tip + 1), pull(end_tip, end_tip - 1)) {
         (Some(s), Some(e)) if e > 0.0 && e > s => Some(Pull {
             side: Side::End,
-            slid_out: e - s.max(0.0),
+            slid_out: e - s.abs(),
         }),
         (Some(s), Some(e)) if s > 0.0 && s > e => Some(Pull {
             side: Side::Start,
-            slid_out: s - e.max(0.0),
+            slid_out: s - e.abs(),
         }),
         _ => None,
     }
@@ -1063,8 +1066,9 @@ mod tests {
         let side = |pull: Option<Pull>| pull.map(|p| p.side);
         let pull = pulled_side(&before, &known, &previous, run);
         assert_eq!(side(pull), Some(Side::End));
-        // The other tip went in: only the pulled tip's 1 cm slid out.
-        assert!((pull.map_or(0.0, |p| p.slid_out) - 0.01).abs() < 1e-12);
+        // The other tip went in 5 mm: that much rope went into the run
+        // there, so 5 mm of the pulled tip's 1 cm left it.
+        assert!((pull.map_or(0.0, |p| p.slid_out) - 0.005).abs() < 1e-12);
         // A stretch between two runs has no tip: its node farthest from the run.
         let mut known = known;
         known[18] = false;
