@@ -111,8 +111,8 @@ fn a_rope_pulled_through_an_occluder_keeps_its_length_and_tightens_the_hidden_be
     // for half a spacing of excess, which this bound refuses.
     assert!(max(&lengths) < 0.02, "{:.3}", max(&lengths));
     // Straightened from the pulled arm (session 42): 1.68 mm against 3.85
-    // off and 5.47 for TrackDLO (1.49 mm since session 57's pull); scaled as a whole towards the chord it
-    // was 3.10, which these bounds refuse.
+    // off and 5.47 for TrackDLO (1.49 mm since session 57's pull); scaled
+    // as a whole towards the chord it was 3.10, which these bounds refuse.
     assert!(mean(&kept) < 0.6 * mean(&grown));
     assert!(mean(&kept) < 0.4 * mean(&trackdlo));
 }

@@ -437,11 +437,11 @@ fn length_of(mut points: impl Iterator<Item = Vec3>) -> f64 {
 /// and least at the chord, the shortest path), so a bisection finds it.
 /// A run asked for less than its chord is laid on the chord. An excess
 /// under [`MIN_SHORTFALL_SPACINGS`] node spacings may be the rest length's
-/// or the visible rope's own error: a run gives up that much only where
-/// a pull is seen, and at most the length its pulled tip moved out beyond
-/// the other since `previous` (rope slid out of the run on this frame),
-/// so a rope pulled through keeps its length frame by frame instead of in
-/// steps of half a spacing. A rope shorter than its rest length is left: a polyline of `M` nodes cuts
+/// or the visible rope's own error: a run gives up that much only where a
+/// pull is seen, and at most the rope that slid out of it since
+/// `previous` (`Pull::slid_out`), so a rope pulled through keeps its
+/// length frame by frame instead of in steps of half a spacing. A rope
+/// shorter than its rest length is left: a polyline of `M` nodes cuts
 /// every bend, so falling short is no evidence that the hidden bend holds
 /// more (opening bends to make up the difference moved them off the rope
 /// on the tuning range).
@@ -555,11 +555,11 @@ struct Pull {
 }
 
 /// The side of `run` whose visible stretch was pulled away from it since
-/// `previous` more than the other, when one was, and by how much more: the move of the stretch's
-/// far node (the rope's tip, where the stretch reaches it) along the rope,
-/// outwards. Along a straight stretch the nodes slide as EM parameterises
-/// the points, so their mean move shows nothing of a pull along the rope;
-/// a tip shows it.
+/// `previous` more than the other, when one was, and the rope that slid
+/// out of the run: the move of the stretch's far node (the rope's tip,
+/// where the stretch reaches it) along the rope, outwards. Along a
+/// straight stretch the nodes slide as EM parameterises the points, so
+/// their mean move shows nothing of a pull along the rope; a tip shows it.
 fn pulled_side(nodes: &[Vec3], known: &[bool], previous: &[Vec3], run: HiddenRun) -> Option<Pull> {
     let m = nodes.len();
     if previous.len() != m {
