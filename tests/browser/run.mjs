@@ -456,6 +456,9 @@ await test('explain mode: a deep link opens at its step; steps change the drawin
   }
   const last = await page.evaluate(() => ({ step: window.upetrack.state.explain.steps[window.upetrack.state.explain.at].name, next: document.getElementById('explain-next').disabled }));
   assert(last.step === 'resampling' && last.next, `after stepping forward: ${JSON.stringify(last)}`);
+  // The length stage between UPE and resampling is told (on by default).
+  const resampling = await page.evaluate(() => document.getElementById('explain-text').textContent);
+  assert(/rope that slid out of it on this frame/.test(resampling), `resampling text: ${resampling.slice(0, 300)}`);
   assert(seen.size === want.length && texts.size === want.length, `${seen.size} drawings and ${texts.size} texts over ${want.length} steps`);
   await page.screenshot({ path: path.join(artifacts, 'explain-resampling.png') });
   await page.click('#explain-back');
