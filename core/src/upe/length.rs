@@ -468,13 +468,13 @@ pub fn conserve_middle_lengths(
     if middle.is_empty() || !(hidden > math::LENGTH_EPSILON) {
         return report;
     }
-    let budget = rest_length - (polyline_length(nodes) - hidden);
-    let spacing = rest_length / (m - 1) as f64;
-    let excess = hidden - budget;
-    let whole = excess >= MIN_SHORTFALL_SPACINGS * spacing;
+    // What the hidden runs hold beyond what the visible rope leaves them
+    // (the rope's length over its rest length, summed in this order).
+    let excess = hidden - (rest_length - (polyline_length(nodes) - hidden));
     if !(excess > 0.0) {
         return report;
     }
+    let whole = excess >= MIN_SHORTFALL_SPACINGS * rest_length / (m - 1) as f64;
     // Read before any run moves: each run's pull is from its own stretches.
     let pulls: Vec<Option<Pull>> = middle
         .iter()
@@ -960,6 +960,13 @@ mod tests {
             .collect()
     }
 
+    /// `hairpin(21, 7, 0.06, 0.04)` with its bend (nodes 6-14) hidden: a
+    /// middle run between two visible arms.
+    fn hidden_bend() -> (Vec<Vec3>, Vec<bool>) {
+        let known = (0..21).map(|i| !(6..15).contains(&i)).collect();
+        (hairpin(21, 7, 0.06, 0.04), known)
+    }
+
     #[test]
     fn a_taut_run_keeps_its_curve_from_the_resting_anchor_and_goes_straight_to_the_pull() {
         // An L of length 2 from (0, 0) up to (0, 1), then to (1, 1), pulled
@@ -989,8 +996,7 @@ mod tests {
     /// the bend at the other stays where it was.
     #[test]
     fn a_rope_pulled_by_one_end_straightens_from_that_end_and_keeps_its_far_bend() {
-        let before = hairpin(21, 7, 0.06, 0.04);
-        let known: Vec<bool> = (0..21).map(|i| !(6..15).contains(&i)).collect();
+        let (before, known) = hidden_bend();
         let rest = polyline_length(&before) - 0.03;
         let on_old_curve = |q: &Vec3| {
             crate::polyline::distance_to_polyline(q, &before[5..=15]).is_some_and(|d| d < 1e-9)
@@ -1048,8 +1054,7 @@ mod tests {
     /// other arm's read as the pulled one, 4.8 mm instead of 3.1).
     #[test]
     fn the_pulled_side_is_told_by_the_tip_of_its_stretch() {
-        let before = hairpin(21, 7, 0.06, 0.04);
-        let known: Vec<bool> = (0..21).map(|i| !(6..15).contains(&i)).collect();
+        let (before, known) = hidden_bend();
         let (out_start, out_end) = (
             (before[5] - before[6]).normalize(),
             (before[15] - before[14]).normalize(),
@@ -1089,8 +1094,7 @@ mod tests {
 
     #[test]
     fn a_rope_pulled_out_from_under_an_occluder_tightens_its_hidden_bend() {
-        let mut nodes = hairpin(21, 7, 0.06, 0.04);
-        let known: Vec<bool> = (0..21).map(|i| !(6..15).contains(&i)).collect();
+        let (mut nodes, known) = hidden_bend();
         let before = nodes.clone();
         let total = polyline_length(&nodes);
         // The visible rope leaves 3 cm less for the bend than it holds.
@@ -1119,8 +1123,7 @@ mod tests {
     /// the run gives up what slid out on this frame, at most the excess.
     #[test]
     fn a_small_excess_is_given_up_as_far_as_the_rope_was_seen_to_slide_out() {
-        let before = hairpin(21, 7, 0.06, 0.04);
-        let known: Vec<bool> = (0..21).map(|i| !(6..15).contains(&i)).collect();
+        let (before, known) = hidden_bend();
         let total = polyline_length(&before);
         let spacing = total / 20.0;
         let rest = total - 0.3 * spacing;
@@ -1150,8 +1153,7 @@ mod tests {
 
     #[test]
     fn a_hidden_bend_asked_for_less_than_its_chord_is_laid_straight() {
-        let before = hairpin(21, 7, 0.06, 0.04);
-        let known: Vec<bool> = (0..21).map(|i| !(6..15).contains(&i)).collect();
+        let (before, known) = hidden_bend();
         let mut nodes = before.clone();
         let r = conserve_middle_lengths(&mut nodes, &known, &[], 0.1);
         assert_eq!(r.runs, 1);
@@ -1162,8 +1164,7 @@ mod tests {
 
     #[test]
     fn a_middle_run_within_half_a_spacing_of_its_share_or_bad_input_is_left() {
-        let before = hairpin(21, 7, 0.06, 0.04);
-        let known: Vec<bool> = (0..21).map(|i| !(6..15).contains(&i)).collect();
+        let (before, known) = hidden_bend();
         let total = polyline_length(&before);
         let spacing = total / 20.0;
         for rest in [total - 0.4 * spacing, f64::NAN, -1.0] {
