@@ -26,7 +26,7 @@ pub const SETTLING_FRAMES: usize = 45;
 /// Version of what the scenarios produce: bump it whenever a change to the
 /// simulator, the renderer or a scenario changes their frames, so that
 /// cached sequences (`upetrack compare`) are written again.
-pub const SIMULATOR_VERSION: u32 = 3;
+pub const SIMULATOR_VERSION: u32 = 4;
 /// Margin added around the projected rope segment that an occlusion hides, pixels.
 const OCCLUSION_MARGIN_PX: f64 = 14.0;
 
