@@ -106,13 +106,16 @@ fn a_rope_pulled_through_an_occluder_keeps_its_length_and_tightens_the_hidden_be
         mean(&grown),
         mean(&trackdlo)
     );
-    // Within issue 28's 3 % on every frame: 1.2 % since a run gives up
-    // what a seen pull slid out of it on each frame; 3.1 % when it waited
-    // for half a spacing of excess, which this bound refuses.
-    assert!(max(&lengths) < 0.02, "{:.3}", max(&lengths));
+    // Within issue 28's 3 % on every frame: 2.3 % since a run gives up
+    // what a seen pull slid out of it on each frame; 4.4 % when it waits
+    // for half a spacing of excess, which this bound refuses (figures with
+    // the simulator's inextensible rope, version 4: against the rope that
+    // stretched 2 % under the pull they were 1.2 and 3.1 %).
+    assert!(max(&lengths) < 0.03, "{:.3}", max(&lengths));
     // Straightened from the pulled arm (session 42): 1.68 mm against 3.85
-    // off and 5.47 for TrackDLO (1.49 mm since session 57's pull); scaled
-    // as a whole towards the chord it was 3.10, which these bounds refuse.
+    // off and 5.47 for TrackDLO (1.46 mm against 3.96 and 3.76 since the
+    // simulator's version 4); scaled as a whole towards the chord it was
+    // 3.10 with version 3, which these bounds refused.
     assert!(mean(&kept) < 0.6 * mean(&grown));
     assert!(mean(&kept) < 0.4 * mean(&trackdlo));
 }
@@ -162,22 +165,3 @@ fn a_hidden_end_pulled_out_from_under_its_occluder_follows_the_rope_that_came_ou
     );
 }
 
-/// Regression for "where the rope crosses itself, the node under the top
-/// stretch takes that stretch's points" (drawn scene 1016 of the tuning
-/// range: a 0.36 m grey loop 1 m away, a box over a quarter of it, one end
-/// pulled 12 cm along the rope). Near a crossing EM mixed the two
-/// stretches' depths and left the lower stretch's nodes a gap across the
-/// crossing: 7.75 mm over the frames. With the node under the top stretch
-/// hidden (`hidden_under_crossings`, the stretch on top read from the depth
-/// beside the crossing) 5.64 mm.
-#[test]
-fn a_node_under_the_stretch_on_top_where_the_rope_crosses_itself_is_hidden() {
-    let (on, off) = drawn_with_and_without(1016, |p| p.upetrack.hidden_under_crossings = false);
-    let (hidden, mixed) = (mean(&on), mean(&off));
-    eprintln!("drawn scene 1016: {hidden:.2} mm, {mixed:.2} mm with the crossing's nodes mixed");
-    assert!(hidden < 6.5, "mean {hidden:.2} mm");
-    assert!(
-        mixed > 7.0,
-        "the scene no longer mixes the stretches: {mixed:.2} mm"
-    );
-}

@@ -56,9 +56,10 @@ pub const JOIN_GAP_FRACTION: f64 = 0.5;
 pub const JOIN_DIAMETER_RATIO: f64 = 1.6;
 
 /// Whether two measured diameters can be one rope's (within
-/// [`JOIN_DIAMETER_RATIO`]; `false` for an unmeasured one).
+/// [`JOIN_DIAMETER_RATIO`]; `false` for an unmeasured one: not positive
+/// or not a number, which `f64::max` would pass over).
 pub fn one_rope_thick(a: f64, b: f64) -> bool {
-    a.max(b) / a.min(b) <= JOIN_DIAMETER_RATIO
+    a > 0.0 && b > 0.0 && a.max(b) / a.min(b) <= JOIN_DIAMETER_RATIO
 }
 /// Fewest points a piece must have to be measured at all.
 const MIN_PIECE_POINTS: usize = 4;

@@ -581,6 +581,20 @@ pub fn initialise(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The rule a recovery is judged by (drawn scene 1032 with the
+    /// simulator's version 3: a box's dark edge 8.2 mm thick beside a
+    /// 4.4 mm rope was taken for it).
+    #[test]
+    fn a_recovery_takes_only_a_rope_as_thick_as_the_one_tracked() {
+        assert!(!one_rope_thick(8.2e-3, 4.4e-3));
+        assert!(!one_rope_thick(4.4e-3, 8.2e-3));
+        assert!(one_rope_thick(5.5e-3, 4.4e-3));
+        assert!(one_rope_thick(4.4e-3, 4.4e-3 * 0.99 * JOIN_DIAMETER_RATIO));
+        // Unmeasured: never one rope.
+        assert!(!one_rope_thick(0.0, 4.4e-3));
+        assert!(!one_rope_thick(f64::NAN, 4.4e-3));
+    }
     use alloc::vec;
 
     #[test]
