@@ -164,4 +164,3 @@ fn a_hidden_end_pulled_out_from_under_its_occluder_follows_the_rope_that_came_ou
         "the scene no longer pulls the end out: {left:.1} mm"
     );
 }
-
