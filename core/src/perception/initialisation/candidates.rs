@@ -479,8 +479,39 @@ fn points_at(from: Vec2, dir: Vec2, target: Vec2, slack: f64) -> bool {
     along >= -slack && across <= cone * along.max(0.0) + slack
 }
 
+/// `true` when the ends at `a` going `da` and at `b` going `db` turn into
+/// each other at one corner: their two rays meet ahead of both (`slack`
+/// pixels behind counts as ahead), neither farther from its end than the
+/// ends are apart plus `slack`. A rope that crosses itself kinks where it
+/// settles against its own strand, and the walk through the crossing stops
+/// at the kink: its two ends point past each other at the kink, not at
+/// each other (drawn report scenes 2030 and 2061, a loop cut there).
+fn meet_at_corner(a: Vec2, da: Vec2, b: Vec2, db: Vec2, slack: f64) -> bool {
+    let (na, nb) = (da.norm(), db.norm());
+    if !(na > 0.0 && nb > 0.0) {
+        return false;
+    }
+    let (ua, ub) = (da / na, db / nb);
+    // a + s ua = b + t ub, solved by Cramer's rule.
+    let cross = ua.x * ub.y - ua.y * ub.x;
+    if !(cross.abs() > CORNER_MIN_SINE) {
+        return false;
+    }
+    let g = b - a;
+    let s = (g.x * ub.y - g.y * ub.x) / cross;
+    let t = (g.x * ua.y - g.y * ua.x) / cross;
+    let reach = g.norm() + slack;
+    (-slack..=reach).contains(&s) && (-slack..=reach).contains(&t)
+}
+
+/// Rays closer to parallel than this sine of their angle meet nowhere
+/// near: two ends that follow one line are the straight test's.
+const CORNER_MIN_SINE: f64 = 0.1;
+
 /// A possible join of two piece ends.
 struct Link {
+    /// A corner join ([`meet_at_corner`]), taken only after every straight one.
+    corner: bool,
     gap: f64,
     a: (usize, bool),
     b: (usize, bool),
@@ -507,10 +538,12 @@ pub(super) fn join(pieces: &[Piece], metric: bool) -> Vec<Chain> {
                     }
                     let ((xa, oa), (xb, ob)) = (pa.end(ha), pb.end(hb));
                     let slack = pa.width_px.max(pb.width_px);
-                    if !(points_at(xa, oa, xb, slack) && points_at(xb, ob, xa, slack)) {
+                    let straight = points_at(xa, oa, xb, slack) && points_at(xb, ob, xa, slack);
+                    if !straight && !meet_at_corner(xa, oa, xb, ob, slack) {
                         continue;
                     }
                     links.push(Link {
+                        corner: !straight,
                         gap,
                         a: (a, ha),
                         b: (b, hb),
@@ -519,7 +552,7 @@ pub(super) fn join(pieces: &[Piece], metric: bool) -> Vec<Chain> {
             }
         }
     }
-    links.sort_by(|x, y| x.gap.total_cmp(&y.gap));
+    links.sort_by(|x, y| x.corner.cmp(&y.corner).then(x.gap.total_cmp(&y.gap)));
     // Each end takes at most one link; no link closes a ring.
     let mut next: Vec<[Option<(usize, bool)>; 2]> = vec![[None, None]; n];
     let mut group: Vec<usize> = (0..n).collect();
@@ -644,4 +677,43 @@ fn lay_out(pieces: &[Piece], parts: &[(usize, bool)], metric: bool) -> Chain {
     zones.sort_unstable();
     c.crossings = zones.windows(2).filter(|w| w[0] == w[1]).count();
     c
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The two ends drawn report scene 2030's loop was cut at, frame 0
+    /// (pixels; the rope 11.8 px wide): the loop's strand going up, the
+    /// rope's end beside it going right, so the two turn into each other.
+    const LOOP_END: (Vec2, Vec2) = (Vec2::new(680.0, 372.0), Vec2::new(0.0, -24.0));
+    const ARM_END: (Vec2, Vec2) = (Vec2::new(662.0, 349.0), Vec2::new(23.0, -4.0));
+    const WIDTH: f64 = 11.8;
+
+    #[test]
+    fn ends_that_turn_into_each_other_meet_at_a_corner_the_straight_test_misses() {
+        let ((a, da), (b, db)) = (LOOP_END, ARM_END);
+        assert!(!(points_at(a, da, b, WIDTH) && points_at(b, db, a, WIDTH)));
+        assert!(meet_at_corner(a, da, b, db, WIDTH));
+        assert!(meet_at_corner(b, db, a, da, WIDTH), "not symmetric");
+    }
+
+    #[test]
+    fn ends_pointing_away_parallel_or_meeting_far_off_are_no_corner() {
+        let ((a, da), (b, db)) = (LOOP_END, ARM_END);
+        assert!(!meet_at_corner(a, -da, b, db, WIDTH), "one points away");
+        assert!(
+            !meet_at_corner(a, da, b, -db, WIDTH),
+            "the other points away"
+        );
+        assert!(!meet_at_corner(a, da, b, da, WIDTH), "parallel");
+        // Rays that meet, but farther from both ends than the gap and a
+        // width (45 and 50 px for a 29 px gap): a detour, no kink.
+        let far = Vec2::new(1.0, -1.0);
+        assert!(!meet_at_corner(a, far, b, db, WIDTH));
+        assert!(
+            !meet_at_corner(a, da, b, Vec2::zeros(), WIDTH),
+            "no direction"
+        );
+    }
 }
