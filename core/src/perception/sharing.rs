@@ -53,6 +53,11 @@ pub struct OtherRopes {
     pub colour: Mask,
     /// ...and leaves the candidates lying along these ropes to them.
     pub taken: Vec<TakenRope>,
+    /// Another rope's colour range passes pixels this rope's passes, in
+    /// this frame: two ropes alike may meet end to end, so the
+    /// initialisation joins no piece ends that meet only at a corner
+    /// ([`super::initialisation::InitGuide::alike_ropes`]).
+    pub alike: bool,
 }
 
 /// Who a pixel of some rope's colour belongs to.

@@ -801,6 +801,7 @@ impl Tracker {
             previous,
             min_length: known.map_or(0.0, |k| fraction * k),
             taken,
+            alike_ropes: obs.others.as_ref().is_some_and(|o| o.alike),
         };
         // A re-initialisation places the rope's nodes, as many as before.
         let mut settings = self.params.init();

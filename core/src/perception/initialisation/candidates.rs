@@ -517,9 +517,25 @@ struct Link {
     b: (usize, bool),
 }
 
+/// Which joins [`join`] may make beyond the straight ones.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Joins {
+    /// Ends that meet at a corner ([`meet_at_corner`]): not where another
+    /// rope of the colour may be in view.
+    pub corners: bool,
+}
+
+impl Default for Joins {
+    /// Corners joined: one rope in view.
+    fn default() -> Self {
+        Self { corners: true }
+    }
+}
+
 /// Joins pieces end to end where their ends are close and point at each
-/// other, and the two are as thick, then lays each chain out as one path.
-pub(super) fn join(pieces: &[Piece], metric: bool) -> Vec<Chain> {
+/// other (or, as `joins` allows, meet at a corner), and the two are as
+/// thick, then lays each chain out as one path.
+pub(super) fn join(pieces: &[Piece], metric: bool, joins: Joins) -> Vec<Chain> {
     let n = pieces.len();
     let mut links = Vec::new();
     for a in 0..n {
@@ -539,7 +555,8 @@ pub(super) fn join(pieces: &[Piece], metric: bool) -> Vec<Chain> {
                     let ((xa, oa), (xb, ob)) = (pa.end(ha), pb.end(hb));
                     let slack = pa.width_px.max(pb.width_px);
                     let straight = points_at(xa, oa, xb, slack) && points_at(xb, ob, xa, slack);
-                    if !straight && !meet_at_corner(xa, oa, xb, ob, slack) {
+                    let corner = joins.corners && meet_at_corner(xa, oa, xb, ob, slack);
+                    if !(straight || corner) {
                         continue;
                     }
                     links.push(Link {
@@ -696,6 +713,41 @@ mod tests {
         assert!(!(points_at(a, da, b, WIDTH) && points_at(b, db, a, WIDTH)));
         assert!(meet_at_corner(a, da, b, db, WIDTH));
         assert!(meet_at_corner(b, db, a, da, WIDTH), "not symmetric");
+    }
+
+    /// A piece of image points only (no depth), `WIDTH` wide.
+    fn piece(points: Vec<Vec2>) -> Piece {
+        let mut p = Piece::empty(1);
+        p.widths = alloc::vec![WIDTH; points.len()];
+        p.zones = alloc::vec![NO_ZONE; points.len()];
+        p.line = points.iter().map(|q| Vec3::new(q.x, q.y, 0.0)).collect();
+        p.length_px = points.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
+        p.length = p.length_px;
+        p.pixels = WIDTH * p.length_px;
+        p.width_px = WIDTH;
+        p.diameter = WIDTH;
+        p.points = points;
+        p
+    }
+
+    /// 2030's loop strand, 48 px up to its end, and the rope's arm, 60 px
+    /// from its end going left.
+    fn kinked_pair() -> [Piece; 2] {
+        let up = (0..=48)
+            .map(|k| Vec2::new(680.0, 420.0 - k as f64))
+            .collect();
+        let left = (0..=60)
+            .map(|k| Vec2::new(662.0 - k as f64, 349.0 + k as f64 * 4.0 / 23.0))
+            .collect();
+        [piece(up), piece(left)]
+    }
+
+    #[test]
+    fn a_corner_join_is_made_for_one_rope_and_not_where_ropes_alike_may_meet() {
+        let one = join(&kinked_pair(), false, Joins::default());
+        assert_eq!(one.len(), 1, "one rope: the kink is joined");
+        let alike = join(&kinked_pair(), false, Joins { corners: false });
+        assert_eq!(alike.len(), 2, "ropes alike: the two ends stay apart");
     }
 
     #[test]

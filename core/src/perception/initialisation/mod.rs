@@ -22,7 +22,7 @@ mod skeleton;
 
 use alloc::vec::Vec;
 
-use candidates::{join, rope_pieces, Chain, Metric};
+use candidates::{join, rope_pieces, Chain, Joins, Metric};
 pub use candidates::{
     one_rope_thick, DIAMETER_PRIOR_FACTOR, EVEN_TOLERANCE, JOIN_DIAMETER_RATIO, JOIN_GAP_DIAMETERS,
     JOIN_GAP_FRACTION, MAX_JOIN_ANGLE_DEGREES, MAX_TURN_PER_WIDTH_DEGREES, MIN_EVEN_SHARE,
@@ -182,6 +182,10 @@ pub struct InitGuide<'a> {
     /// The other ropes tracked in this frame: candidates along them are
     /// theirs.
     pub taken: &'a [TakenRope],
+    /// Other ropes of this rope's colour may be in view: piece ends that
+    /// meet only at a corner may be two ropes' and are not joined (a
+    /// rope alone is one rope kinked there).
+    pub alike_ropes: bool,
 }
 
 /// A fresh set of nodes for the rope in this frame.
@@ -295,11 +299,12 @@ fn find(
     metric: Option<Metric<'_>>,
     settings_min_pixels: u32,
     prior: RopePrior,
+    joins: Joins,
 ) -> Found {
     let (shapes, labels) = skeleton::shapes(mask, MIN_SHAPE_PIXELS);
     let largest = shapes.first().map_or(0, |s| s.pixels.len());
     let (pieces, mut set_aside) = rope_pieces(&shapes, &labels, mask, metric, prior.diameter);
-    let mut chains = join(&pieces, metric.is_some());
+    let mut chains = join(&pieces, metric.is_some(), joins);
     chains.sort_by(|a, b| b.length.total_cmp(&a.length));
     let centre = |c: &Chain| {
         let n = c.points.len().max(1) as f64;
@@ -434,7 +439,13 @@ fn mean_distance(nodes: &[Vec3], line: &[Vec3]) -> f64 {
 /// alone, without depth). The end with the smaller x (then smaller y)
 /// comes first.
 pub fn find_centre_line(mask: &Mask, min_blob_pixels: u32) -> Result<Vec<Vec2>, InitError> {
-    let found = find(mask, None, min_blob_pixels, RopePrior::default());
+    let found = find(
+        mask,
+        None,
+        min_blob_pixels,
+        RopePrior::default(),
+        Joins::default(),
+    );
     let Some(chain) = found.chains.first() else {
         return Err(found.nothing(min_blob_pixels));
     };
@@ -500,7 +511,16 @@ pub fn initialise(
         camera,
         cloud: &settings.cloud,
     };
-    let found = find(mask, Some(metric), settings.min_blob_pixels, guide.prior);
+    let joins = Joins {
+        corners: !guide.alike_ropes,
+    };
+    let found = find(
+        mask,
+        Some(metric),
+        settings.min_blob_pixels,
+        guide.prior,
+        joins,
+    );
     if found.chains.is_empty() {
         return Err(found.nothing(settings.min_blob_pixels));
     }
@@ -771,7 +791,7 @@ mod tests {
             }
         }
         assert_eq!(skeleton::shapes(&mask, 1).0.len(), 1, "still one shape");
-        let found = find(&mask, None, 150, RopePrior::default());
+        let found = find(&mask, None, 150, RopePrior::default(), Joins::default());
         assert_eq!(found.chains.len(), 1, "{} candidates", found.chains.len());
         // Within a rope's width: the tip's extension follows a ragged end.
         assert_follows(&found.chains[0].points, &rope, 11.0);
