@@ -103,7 +103,7 @@ impl MultiTracker {
         let masks = self.segment(frame, occlusions)?;
         let refs: Vec<&Mask> = masks.iter().collect();
         let share = self.share(frame, &refs).swap_remove(k);
-        Ok(Some(self.observation(k, frame, share, &refs, occlusions)))
+        Ok(Some(self.observation(k, frame, share, refs[k], occlusions)))
     }
 
     /// Forgets every rope's state.
@@ -152,7 +152,7 @@ impl MultiTracker {
             .map(|(k, share)| {
                 self.ropes[k]
                     .is_tracking()
-                    .then(|| self.observation(k, frame, share, &masks, occlusions))
+                    .then(|| self.observation(k, frame, share, masks[k], occlusions))
             })
             .collect()
     }
@@ -188,7 +188,7 @@ impl MultiTracker {
                 Observation::new(masks[k].clone(), cloud, occlusions)
             } else {
                 let share = self.share(frame, &masks).swap_remove(k);
-                self.observation(k, frame, share, &masks, occlusions)
+                self.observation(k, frame, share, masks[k], occlusions)
             };
             outputs[k] = Some(self.ropes[k].update(frame, &obs));
         }
@@ -261,21 +261,15 @@ impl MultiTracker {
         share_pixels(frame, self.ropes[0].camera(), masks, &lines, reach)
     }
 
-    /// Rope `k`'s observation of its share (`masks`: every rope's colour
-    /// mask, `masks[k]` its own).
+    /// Rope `k`'s observation of its share (`colour`: its colour mask).
     fn observation(
         &self,
         k: usize,
         frame: &Frame<'_>,
         share: PixelShare,
-        masks: &[&Mask],
+        colour: &Mask,
         occlusions: &[Rect],
     ) -> Observation {
-        let colour = masks[k];
-        let alike = masks
-            .iter()
-            .enumerate()
-            .any(|(j, m)| j != k && m.data.iter().zip(&colour.data).any(|(&a, &b)| a && b));
         let rope = &self.ropes[k];
         let cloud = rope.cloud(frame, &share.own);
         let mut obs = Observation::new(share.own, cloud, occlusions);
@@ -304,7 +298,7 @@ impl MultiTracker {
             pixels: share.others,
             colour: colour.clone(),
             taken,
-            alike,
+            alike: share.alike,
         });
         obs
     }

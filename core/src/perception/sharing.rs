@@ -40,6 +40,8 @@ pub struct PixelShare {
     pub own: Mask,
     /// The pixels of the other ropes: they hide this one where they lie.
     pub others: Mask,
+    /// Another rope's colour range passes a pixel this rope's passes.
+    pub alike: bool,
 }
 
 /// What the other ropes tracked in the same frame leave a rope.
@@ -112,6 +114,7 @@ pub fn share_pixels(
         .map(|_| PixelShare {
             own: Mask::new(w, h),
             others: Mask::new(w, h),
+            alike: false,
         })
         .collect();
     for (i, &bits) in colours.iter().enumerate().filter(|(_, b)| **b != 0) {
@@ -129,6 +132,7 @@ pub fn share_pixels(
         );
         for (k, share) in shares.iter_mut().enumerate() {
             let of_colour = bits & (1 << k) != 0;
+            share.alike |= of_colour && bits & !(1 << k) != 0;
             match owner {
                 // The nearest rope's, if it has its colour (else nobody's).
                 Owner::Rope(j) if j == k => share.own.data[i] = of_colour,

@@ -555,12 +555,13 @@ pub(super) fn join(pieces: &[Piece], metric: bool, joins: Joins) -> Vec<Chain> {
                     let ((xa, oa), (xb, ob)) = (pa.end(ha), pb.end(hb));
                     let slack = pa.width_px.max(pb.width_px);
                     let straight = points_at(xa, oa, xb, slack) && points_at(xb, ob, xa, slack);
-                    let corner = joins.corners && meet_at_corner(xa, oa, xb, ob, slack);
+                    let corner =
+                        !straight && joins.corners && meet_at_corner(xa, oa, xb, ob, slack);
                     if !(straight || corner) {
                         continue;
                     }
                     links.push(Link {
-                        corner: !straight,
+                        corner,
                         gap,
                         a: (a, ha),
                         b: (b, hb),
