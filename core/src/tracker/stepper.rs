@@ -120,6 +120,7 @@ impl Stepper {
                     .map_report(|r| StepReports {
                         em: Some(r.em),
                         upe: Some(r.upe),
+                        free_space: Some(r.free_space),
                         ..StepReports::default()
                     })
             }
@@ -181,6 +182,49 @@ mod tests {
         let out = stepper.step(&input, &Params::default());
         assert_eq!(out.nodes.len(), nodes.len());
         assert!(stepper.fits(&nodes));
+    }
+
+    /// Regression for "the free-space test never fired": UPETrack's
+    /// free-space report was left out of [`StepReports`], so the recovery
+    /// test of hidden nodes left in free space (`Contradiction::measure`)
+    /// always read none. A hidden tip over bare table with nothing beside
+    /// it to turn into: found, not cleared, and reported.
+    #[test]
+    fn the_free_space_report_reaches_the_recovery_tests() {
+        use crate::perception::evidence::fixture::Table;
+        use crate::tracker::recovery::Contradiction;
+        use alloc::vec::Vec;
+        // A bare table at 0.6 m, nothing declared hiding anything: the
+        // three visible nodes lie on rope points, the hidden tip over table.
+        let table = Table::new(64, 48, 60.0, 600);
+        let frame = table.frame();
+        let evidence = table.evidence(&frame, &[], 0.0075);
+        let at = |u: f64| table.at(u, 24.0, 0.59);
+        let previous: Vec<Vec3> = [44.0, 40.0, 36.0, 30.0, 26.0, 22.0]
+            .iter()
+            .map(|&u| at(u))
+            .collect();
+        let cloud: Vec<Vec3> = (0..=40).map(|k| at(36.0 + k as f64 * 0.2)).collect();
+        let visible = [true, true, true, false, false, false];
+        let input = StepInput {
+            previous: &previous,
+            cloud: &cloud,
+            visible: &visible,
+            partly_seen: &[],
+            camera: &table.camera,
+            evidence: Some(evidence),
+            rest_length: None,
+            frame_interval: 1.0 / crate::perception::camera::DEFAULT_FPS,
+            not_rope: &[],
+        };
+        let out = Stepper::Upetrack.step(&input, &Params::default());
+        let free = out
+            .report
+            .free_space
+            .expect("UPETrack reports its free-space stage");
+        assert_eq!((free.found, free.left), (3, 3), "{free:?}");
+        let against = Contradiction::measure(&out.nodes, &cloud, &out.report, None, 0.01, &[]);
+        assert!(against.in_free_space(), "{against:?}");
     }
 
     #[test]
