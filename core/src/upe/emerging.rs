@@ -189,7 +189,9 @@ pub struct InView<'a> {
     /// Whether something hides the rope within a distance of a point
     /// (`Evidence::hidden_around`).
     pub hidden_near: &'a dyn Fn(&Vec3, f64) -> bool,
-    /// Whether a piece of rope (its line) lies on the table ([`lies_on`]).
+    /// Whether a piece of rope (its line) may be rope where it is: on the
+    /// table ([`lies_on`]) or in the air, with a surface well behind it
+    /// on both sides (`Evidence::stands_free`), not along an object's edge.
     pub on_surface: &'a dyn Fn(&[Vec3]) -> bool,
 }
 
@@ -297,7 +299,8 @@ fn connected_sets(points: &[Vec3], link: f64) -> Vec<Vec<usize>> {
 /// the rope when it was wholly in view, at least [`MIN_PIECE_SPACINGS`]
 /// long, coming out of hidden space onto the surface (`hidden_near(p, r)`:
 /// something hides the rope within `r` of `p`, near its near tip, not near
-/// its far one; `on_surface(line)`: the piece lies on the table), and which the run's rest length (`rest_spacing`
+/// its far one; `on_surface(line)`: the piece lies on the table or stands
+/// free in the air), and which the run's rest length (`rest_spacing`
 /// per node, give or take a spacing or [`REST_LENGTH_SLACK`] of the rope,
 /// the larger) can reach along with the piece. The run's new curve keeps its
 /// old shape from the anchor and is pulled straight to the piece's near
@@ -427,8 +430,9 @@ pub fn follow_emerged_ends(
 /// the piece comes out of hidden space onto the surface: there is hidden
 /// space within [`EXIT_GAP_SPACINGS`] of its near tip and none around its
 /// far tip (a bend of the run that bulges out and back under has hidden
-/// space at both), and it lies on the surface (a box's dark lower edge
-/// stands above the table). Its line from the near tip when it can.
+/// space at both), and it lies on the surface or stands free (a box's
+/// dark lower edge stands above the table, against the box's face). Its
+/// line from the near tip when it can.
 fn fits(
     piece: &Piece,
     anchor: &Vec3,

@@ -465,11 +465,13 @@ fn run_step(
         (Some(spacing), Some(e), true) => {
             let reach = emerging::explained_reach(spacing, e.radius);
             let hidden_near = |p: &Vec3, r: f64| e.hidden_around(p, r);
+            // On the table, or lifted off it into the air.
             let on_surface = |line: &[Vec3]| {
                 table
                     .get_or_init(|| fit_table(e))
                     .as_ref()
                     .is_none_or(|t| lies_on(t, line, e.radius))
+                    || e.stands_free(line)
             };
             let view = InView {
                 cloud: input.cloud,
