@@ -112,7 +112,7 @@ impl Evidence<'_> {
         let Some((u, v)) = self.pixel_of(p) else {
             return false;
         };
-        if self.occlusions.iter().any(|r| r.contains(u, v)) || self.other_rope_at(u, v) {
+        if self.covered_at(u, v) {
             return true;
         }
         self.depth_at_pixel(u, v)
@@ -148,9 +148,7 @@ impl Evidence<'_> {
             let (u, v) = (libm::round(q.x + du) as i64, libm::round(q.y + dv) as i64);
             (u >= 0 && v >= 0 && u < w && v < h).then_some((u, v))
         };
-        let covered = |(u, v): (i64, i64)| {
-            self.occlusions.iter().any(|r| r.contains(u, v)) || self.other_rope_at(u, v)
-        };
+        let covered = |(u, v): (i64, i64)| self.covered_at(u, v);
         // A depth that can stand for the table: measured and not rope.
         let depth = |(u, v): (i64, i64)| {
             let raw = self.frame.depth[(v * w + u) as usize];
@@ -193,7 +191,7 @@ impl Evidence<'_> {
             if u < 0 || v < 0 || u >= w || v >= h || self.mask.get(u, v) {
                 return None;
             }
-            if self.occlusions.iter().any(|r| r.contains(u, v)) || self.other_rope_at(u, v) {
+            if self.covered_at(u, v) {
                 return Some(false);
             }
             self.depth_at_pixel(u, v).map(|d| d > z + OCCLUDER_MARGIN)
@@ -253,6 +251,12 @@ impl Evidence<'_> {
         (raw != 0).then_some(raw as f64 * self.frame.depth_scale)
     }
 
+    /// `true` when a declared occlusion rectangle or another tracked rope
+    /// covers pixel `(u, v)`.
+    fn covered_at(&self, u: i64, v: i64) -> bool {
+        self.occlusions.iter().any(|r| r.contains(u, v)) || self.other_rope_at(u, v)
+    }
+
     /// `true` when another tracked rope covers pixel `(u, v)`.
     fn other_rope_at(&self, u: i64, v: i64) -> bool {
         self.others.is_some_and(|m| m.get(u, v))
@@ -273,7 +277,7 @@ impl Evidence<'_> {
             return Sight::OutOfView;
         };
         let (w, h) = (self.frame.width as i64, self.frame.height as i64);
-        if self.occlusions.iter().any(|r| r.contains(u, v)) || self.other_rope_at(u, v) {
+        if self.covered_at(u, v) {
             return Sight::Covered;
         }
         let focal = 0.5 * (self.camera.fx + self.camera.fy);
@@ -387,6 +391,24 @@ pub(crate) mod fixture {
             let c = &self.camera;
             Vec3::new((u - c.cx) * z / c.fx, (v - c.cy) * z / c.fy, z)
         }
+
+        /// Six nodes along row 24 at 0.59 m (just above a table at 0.6 m):
+        /// 0-2 from column 44 in to column 36, 3-5 (a hidden tip) on to
+        /// column 22.
+        pub fn tip_along_row_24(&self) -> Vec<Vec3> {
+            [44.0, 40.0, 36.0, 30.0, 26.0, 22.0]
+                .iter()
+                .map(|&u| self.at(u, 24.0, 0.59))
+                .collect()
+        }
+
+        /// Rope points along row 24 from column 36 to 44, at 0.59 m: what
+        /// the first three nodes of [`Table::tip_along_row_24`] see.
+        pub fn rope_along_row_24(&self) -> Vec<Vec3> {
+            (0..=40)
+                .map(|k| self.at(36.0 + k as f64 * 0.2, 24.0, 0.59))
+                .collect()
+        }
     }
 }
 
@@ -430,26 +452,21 @@ mod tests {
             let e = t.evidence(&frame, &above, 0.005);
             assert!(!e.stands_free(&lifted));
         }
+        // The same piece over other rows below it, at `depth` mm.
+        let below = |depth: u16| {
+            let mut other = Table::new(80, 40, 60.0, 600);
+            other.mask.data.clone_from(&t.mask.data);
+            other.depth[21 * 80..].fill(depth);
+            other
+        };
         // A box 5.5 cm high over the rows below, its top edge along the
         // piece: one side is the box's face.
-        let mut boxed = Table::new(80, 40, 60.0, 600);
-        boxed.mask.data.clone_from(&t.mask.data);
-        for v in 21..40 {
-            for u in 0..80 {
-                boxed.depth[v * 80 + u] = 545;
-            }
-        }
+        let boxed = below(545);
         let frame = boxed.frame();
         assert!(!boxed.evidence(&frame, &[], 0.005).stands_free(&lifted));
         // No depth below: only the side above is measured, and one side
         // alone is no evidence.
-        let mut unmeasured = Table::new(80, 40, 60.0, 600);
-        unmeasured.mask.data.clone_from(&t.mask.data);
-        for v in 21..40 {
-            for u in 0..80 {
-                unmeasured.depth[v * 80 + u] = 0;
-            }
-        }
+        let unmeasured = below(0);
         let frame = unmeasured.frame();
         assert!(!unmeasured.evidence(&frame, &[], 0.005).stands_free(&lifted));
         assert!(!t.evidence(&t.frame(), &[], 0.005).stands_free(&[]));

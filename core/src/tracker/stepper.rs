@@ -193,18 +193,13 @@ mod tests {
     fn the_free_space_report_reaches_the_recovery_tests() {
         use crate::perception::evidence::fixture::Table;
         use crate::tracker::recovery::Contradiction;
-        use alloc::vec::Vec;
         // A bare table at 0.6 m, nothing declared hiding anything: the
         // three visible nodes lie on rope points, the hidden tip over table.
         let table = Table::new(64, 48, 60.0, 600);
         let frame = table.frame();
         let evidence = table.evidence(&frame, &[], 0.0075);
-        let at = |u: f64| table.at(u, 24.0, 0.59);
-        let previous: Vec<Vec3> = [44.0, 40.0, 36.0, 30.0, 26.0, 22.0]
-            .iter()
-            .map(|&u| at(u))
-            .collect();
-        let cloud: Vec<Vec3> = (0..=40).map(|k| at(36.0 + k as f64 * 0.2)).collect();
+        let previous = table.tip_along_row_24();
+        let cloud = table.rope_along_row_24();
         let visible = [true, true, true, false, false, false];
         let input = StepInput {
             previous: &previous,

@@ -174,10 +174,7 @@ mod tests {
     /// Six nodes along row 24: 0-2 in from the right edge to the right
     /// half's border, 3-5 (the hidden tip) on over the left half.
     fn tip_over_free_table() -> Vec<Vec3> {
-        [44.0, 40.0, 36.0, 30.0, 26.0, 22.0]
-            .iter()
-            .map(|&u| at(u, 24.0))
-            .collect()
+        table().tip_along_row_24()
     }
 
     #[test]

@@ -605,12 +605,8 @@ mod tests {
         }];
         let evidence = table.evidence(&frame, &rects, 0.0075);
         let camera = table.camera;
-        let at = |u: f64| table.at(u, 24.0, 0.59);
-        let previous: Vec<Vec3> = [44.0, 40.0, 36.0, 30.0, 26.0, 22.0]
-            .iter()
-            .map(|&u| at(u))
-            .collect();
-        let cloud: Vec<Vec3> = (0..=40).map(|k| at(36.0 + k as f64 * 0.2)).collect();
+        let previous = table.tip_along_row_24();
+        let cloud = table.rope_along_row_24();
         let visible = [true, true, true, false, false, false];
         let input = StepInput {
             previous: &previous,
