@@ -175,7 +175,34 @@ fn cmd_track(args: &TrackArgs) -> Result<(), CliError> {
         lost,
         args.out.display()
     );
+    report_checks(&result);
     report_initialisations(&result)
+}
+
+/// Says on how many frames a recovery test fired and what came of it
+/// (`checks` in the result JSON has every frame's measures).
+fn report_checks(result: &upetrack_io::result::TrackResult) {
+    let mut verdicts: Vec<(&str, usize)> = Vec::new();
+    for c in result.frames.iter().filter_map(|f| f.checks.as_ref()) {
+        if c.fired.is_empty() {
+            continue;
+        }
+        match verdicts.iter_mut().find(|(v, _)| *v == c.verdict) {
+            Some((_, n)) => *n += 1,
+            None => verdicts.push((&c.verdict, 1)),
+        }
+    }
+    let fired: usize = verdicts.iter().map(|(_, n)| n).sum();
+    if fired > 0 {
+        let said: Vec<String> = verdicts
+            .iter()
+            .map(|(v, n)| format!("{} {n}", v.replace('_', " ")))
+            .collect();
+        eprintln!(
+            "a recovery test fired on {fired} frames: {} (`checks` in the result JSON says what each measured)",
+            said.join(", ")
+        );
+    }
 }
 
 /// Most initialisations `track` describes one by one.

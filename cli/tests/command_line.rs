@@ -258,6 +258,35 @@ fn a_state_that_keeps_contradicting_the_images_is_not_reinitialised_every_frame(
         "the scene no longer contradicts its state"
     );
     assert!(recovered.len() <= 5, "recovered on frames {recovered:?}");
+    // Every stepped frame says what the tests read and what came of it:
+    // the frames between recoveries that still contradict say they waited.
+    let result: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out).expect("result")).expect("json");
+    let frames = result["frames"].as_array().expect("frames");
+    assert!(
+        frames[0].get("checks").is_none(),
+        "the first frame initialised"
+    );
+    let verdict = |f: &serde_json::Value| f["checks"]["verdict"].as_str().map(String::from);
+    let by_verdict = |v: &str| -> Vec<usize> {
+        (0..frames.len())
+            .filter(|&i| verdict(&frames[i]).as_deref() == Some(v))
+            .collect()
+    };
+    assert_eq!(by_verdict("recovered"), recovered);
+    assert!(!by_verdict("waited").is_empty(), "no frame waited");
+    for (i, f) in frames.iter().enumerate().skip(1) {
+        let fired = f["checks"]["fired"]
+            .as_array()
+            .expect("every stepped frame has checks");
+        assert_eq!(
+            fired.is_empty(),
+            verdict(f).as_deref() == Some("agreed"),
+            "frame {i}"
+        );
+    }
+    let said = String::from_utf8_lossy(&o.stderr);
+    assert!(said.contains("a recovery test fired on"), "{said}");
 }
 
 /// The frames of `result.json` (written by `track`) reported recovered.

@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 use upetrack::perception::initialisation::InitReport;
-use upetrack::tracker::Contradiction;
+use upetrack::tracker::{Contradiction, Judgement};
 use upetrack::Params;
 
 /// One frame of a result.
@@ -38,6 +38,10 @@ pub struct FrameRecord {
     /// set aside.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub init: Option<InitReport>,
+    /// On a frame where a step ran (tracked or recovered): what the
+    /// recovery tests measured after it and what came of it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub checks: Option<ChecksRecord>,
 }
 
 /// Why a tracked state was replaced: the recovery tests that fired and
@@ -57,6 +61,36 @@ impl RecoveryRecord {
         Self {
             fired: c.fired().map(String::from).collect(),
             measured: *c,
+        }
+    }
+}
+
+/// What the recovery tests read after a step, and what came of it: a
+/// state kept although a test fired says why here.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct ChecksRecord {
+    /// `agreed` (no test fired), `waited` (recoveries back off),
+    /// `nothing_found`, `other_thickness` (the rope found is not as thick
+    /// as the one tracked), `beside_the_rope` (what contradicted lies
+    /// beside the rope tracked), `recovered`.
+    pub verdict: String,
+    /// The tests that fired, as in [`RecoveryRecord::fired`].
+    pub fired: Vec<String>,
+    /// Cloud points the tests read.
+    pub cloud_points: usize,
+    /// The measures.
+    #[serde(flatten)]
+    pub measured: Contradiction,
+}
+
+impl ChecksRecord {
+    /// The record of `j`.
+    pub fn of(j: &Judgement) -> Self {
+        Self {
+            verdict: j.verdict.name().to_string(),
+            fired: j.measured.fired().map(String::from).collect(),
+            cloud_points: j.cloud_points,
+            measured: j.measured,
         }
     }
 }

@@ -5,7 +5,7 @@ use upetrack::tracker::{FrameOutput, FrameStatus, Observation};
 use upetrack::{MultiTracker, Params, Tracker};
 
 use crate::error::SequenceError;
-use crate::result::{FrameRecord, RecoveryRecord, RopeResult, TrackResult};
+use crate::result::{ChecksRecord, FrameRecord, RecoveryRecord, RopeResult, TrackResult};
 use crate::sequence::{DecodedFrame, Sequence};
 use crate::source::Source;
 
@@ -95,6 +95,7 @@ pub fn output_record(
             _ => None,
         },
         init: output.init.clone(),
+        checks: output.judgement.as_ref().map(ChecksRecord::of),
     }
 }
 

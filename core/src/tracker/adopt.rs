@@ -82,6 +82,7 @@ impl Tracker {
             upe: None,
             trackdlo: None,
             init: Some(init.report),
+            judgement: None,
         }
     }
 }

@@ -6,7 +6,7 @@
 use alloc::vec::Vec;
 use core::ops::ControlFlow;
 
-use super::recovery::{beside_rope_found, Contradiction, UNEXPLAINED_REACH};
+use super::recovery::{beside_rope_found, Contradiction, Judgement, Verdict, UNEXPLAINED_REACH};
 use super::stepper::StepReports;
 use super::{FrameOutput, FrameStatus, Observation, Tracker};
 use crate::math::Vec3;
@@ -21,33 +21,44 @@ impl Tracker {
     /// the back-off allows, by a rope as thick as the one tracked), unless
     /// only the unexplained cloud fired and the rope found is the one
     /// tracked: then the state is kept. `Continue` with the points to
-    /// remember beside the rope, or `Break` with the recovered frame.
+    /// remember beside the rope and the judgement, or `Break` with the
+    /// recovered frame.
     pub(super) fn judge_step(
         &mut self,
         frame: &Frame<'_>,
         obs: &Observation,
         out: &StepOutput<StepReports>,
         not_rope: &[Vec3],
-    ) -> ControlFlow<FrameOutput, Vec<Vec3>> {
-        let against = self.contradiction(&out.nodes, &obs.cloud, &out.report, not_rope);
-        if !against.contradicts() {
+    ) -> ControlFlow<FrameOutput, (Vec<Vec3>, Judgement)> {
+        let measured = self.contradiction(&out.nodes, &obs.cloud, &out.report, not_rope);
+        let judged = |verdict| Judgement {
+            measured,
+            verdict,
+            cloud_points: obs.cloud.len(),
+        };
+        let kept = |verdict| ControlFlow::Continue((Vec::new(), judged(verdict)));
+        if !measured.contradicts() {
             self.recovery.agreed();
-            return ControlFlow::Continue(Vec::new());
+            return kept(Verdict::Agreed);
         }
         if !self.recovery.may_recover() {
-            return ControlFlow::Continue(Vec::new());
+            return kept(Verdict::Waited);
         }
         let attempt = self.find_rope(frame, obs).ok();
         self.recovery.recovered();
-        let Some(init) = attempt.filter(|init| self.as_thick_as_tracked(init)) else {
-            return ControlFlow::Continue(Vec::new());
+        let Some(init) = attempt else {
+            return kept(Verdict::NothingFound);
         };
+        if !self.as_thick_as_tracked(&init) {
+            return kept(Verdict::OtherThickness);
+        }
         let step = (&out.nodes[..], &out.visible[..]);
-        match self.beside_the_rope_found(step, &init, &obs.cloud, &against) {
-            Some(beside) => ControlFlow::Continue(beside),
+        match self.beside_the_rope_found(step, &init, &obs.cloud, &measured) {
+            Some(beside) => ControlFlow::Continue((beside, judged(Verdict::BesideTheRope))),
             None => {
                 let mut again = self.adopt(init, frame, obs);
-                again.status = FrameStatus::Recovered(against);
+                again.status = FrameStatus::Recovered(measured);
+                again.judgement = Some(judged(Verdict::Recovered));
                 ControlFlow::Break(again)
             }
         }

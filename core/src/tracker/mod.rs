@@ -43,8 +43,8 @@ mod stepper;
 
 pub(crate) use camera::CameraFollowing;
 pub use recovery::{
-    beside_rope_found, Contradiction, RecoveryBackoff, MAX_RECOVERY_WAIT, MIN_NODES_IN_FREE_SPACE,
-    STRETCH_LIMIT, UNEXPLAINED_LIMIT, UNEXPLAINED_REACH,
+    beside_rope_found, Contradiction, Judgement, RecoveryBackoff, Verdict, MAX_RECOVERY_WAIT,
+    MIN_NODES_IN_FREE_SPACE, STRETCH_LIMIT, UNEXPLAINED_LIMIT, UNEXPLAINED_REACH,
 };
 pub use stepper::{StepReports, Stepper};
 
@@ -171,6 +171,9 @@ pub struct FrameOutput {
     /// What initialisation found and why it took what it took (frames
     /// initialised or recovered only).
     pub init: Option<InitReport>,
+    /// What the recovery tests read after the step and what came of it
+    /// (frames where a step ran: tracked and recovered).
+    pub judgement: Option<Judgement>,
 }
 
 impl FrameOutput {
@@ -638,8 +641,8 @@ impl Tracker {
         let camera = self.camera;
         let input = self.step_input(&camera, frame, obs, &prev, &classes, &not_rope);
         let out = self.stepper.step(&input, &self.params);
-        let beside = match self.judge_step(frame, obs, &out, &not_rope) {
-            core::ops::ControlFlow::Continue(beside) => beside,
+        let (beside, judgement) = match self.judge_step(frame, obs, &out, &not_rope) {
+            core::ops::ControlFlow::Continue(kept) => kept,
             core::ops::ControlFlow::Break(again) => return again,
         };
         let mut not_rope = self.not_rope_after(&out.nodes, &classes.visible, &obs.cloud);
@@ -659,6 +662,7 @@ impl Tracker {
             upe: out.report.upe,
             trackdlo: out.report.trackdlo,
             init: None,
+            judgement: Some(judgement),
         }
     }
 
@@ -851,6 +855,7 @@ impl Tracker {
             upe: None,
             trackdlo: None,
             init: None,
+            judgement: None,
         }
     }
 

@@ -155,6 +155,58 @@ impl Contradiction {
     }
 }
 
+/// What came of a step once the recovery tests had read it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(rename_all = "snake_case")
+)]
+pub enum Verdict {
+    /// No test fired: the state agrees with the images.
+    Agreed,
+    /// A test fired, but recoveries in a row back off
+    /// ([`RecoveryBackoff`]): the state is kept for this frame.
+    Waited,
+    /// A test fired and the images were searched, but no rope was found
+    /// in them: the state is kept.
+    NothingFound,
+    /// The rope found is not as thick as the one tracked (another
+    /// rope-coloured thing): the state is kept.
+    OtherThickness,
+    /// Only the unexplained cloud fired and the rope found is the one
+    /// tracked: what contradicted lies beside it and is remembered.
+    BesideTheRope,
+    /// The state was replaced by the rope found again.
+    Recovered,
+}
+
+impl Verdict {
+    /// The verdict's name in the result JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Agreed => "agreed",
+            Self::Waited => "waited",
+            Self::NothingFound => "nothing_found",
+            Self::OtherThickness => "other_thickness",
+            Self::BesideTheRope => "beside_the_rope",
+            Self::Recovered => "recovered",
+        }
+    }
+}
+
+/// The recovery tests' reading of one step, and what came of it: what
+/// makes a recovery, or a missing one, explainable after the fact.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Judgement {
+    /// What the three tests measured.
+    pub measured: Contradiction,
+    /// What the tracker did about it.
+    pub verdict: Verdict,
+    /// Cloud points the tests read.
+    pub cloud_points: usize,
+}
+
 /// Points of `cloud` beside the rope, when the tracked `nodes` (those
 /// `visible` on rope points) are the rope an initialisation `found` (its
 /// nodes) on the same images: every visible node, and the middle of every
