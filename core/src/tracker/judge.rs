@@ -6,7 +6,9 @@
 use alloc::vec::Vec;
 use core::ops::ControlFlow;
 
-use super::recovery::{beside_rope_found, Contradiction, Judgement, Verdict, UNEXPLAINED_REACH};
+use super::recovery::{
+    beside_rope_found, seen_left_out, Contradiction, Judgement, Verdict, UNEXPLAINED_REACH,
+};
 use super::stepper::StepReports;
 use super::{FrameOutput, FrameStatus, Observation, Tracker};
 use crate::math::Vec3;
@@ -51,6 +53,14 @@ impl Tracker {
         };
         if !self.as_thick_as_tracked(&init) {
             return kept(Verdict::OtherThickness);
+        }
+        // A rope found that leaves out rope the state sees is not the
+        // whole rope: replacing the state would lose what is seen. Not
+        // where ropes alike share the frame: a node may be seen on another.
+        let alike = obs.others.as_ref().is_some_and(|o| o.alike);
+        let reach = self.unexplained_reach();
+        if !alike && seen_left_out(&out.nodes, &out.visible, &init.nodes, reach) > 0 {
+            return kept(Verdict::LeavesSeenRopeOut);
         }
         let step = (&out.nodes[..], &out.visible[..]);
         match self.beside_the_rope_found(step, &init, &obs.cloud, &measured) {

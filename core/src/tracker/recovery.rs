@@ -177,6 +177,10 @@ pub enum Verdict {
     /// Only the unexplained cloud fired and the rope found is the one
     /// tracked: what contradicted lies beside it and is remembered.
     BesideTheRope,
+    /// The rope found leaves out rope the state sees (a node seen on the
+    /// rope lies beyond the unexplained reach of it): it is something
+    /// else, or only part of the rope, and the state is kept.
+    LeavesSeenRopeOut,
     /// The state was replaced by the rope found again.
     Recovered,
 }
@@ -190,6 +194,7 @@ impl Verdict {
             Self::NothingFound => "nothing_found",
             Self::OtherThickness => "other_thickness",
             Self::BesideTheRope => "beside_the_rope",
+            Self::LeavesSeenRopeOut => "leaves_seen_rope_out",
             Self::Recovered => "recovered",
         }
     }
@@ -205,6 +210,18 @@ pub struct Judgement {
     pub verdict: Verdict,
     /// Cloud points the tests read.
     pub cloud_points: usize,
+}
+
+/// How many of the `visible` `nodes` (the ones a step saw on rope
+/// points) lie farther than `reach` from the axis through `found`, the
+/// nodes of a rope found again: seen rope that rope would leave out.
+pub fn seen_left_out(nodes: &[Vec3], visible: &[bool], found: &[Vec3], reach: f64) -> usize {
+    let seen: Vec<Vec3> = nodes
+        .iter()
+        .zip(visible)
+        .filter_map(|(n, &v)| v.then_some(*n))
+        .collect();
+    far_from_axis(found, &seen, reach).len()
 }
 
 /// Points of `cloud` beside the rope, when the tracked `nodes` (those
@@ -442,5 +459,30 @@ mod tests {
         let mut hidden = visible;
         hidden[12] = false;
         assert!(beside_rope_found(&onto, &hidden, &found, &cloud, (0.0075, reach)).is_some());
+    }
+
+    /// Regression for "a recovery takes a box's edge joined to part of the
+    /// rope and loses the rope the state sees" (drawn 1032, frame 30).
+    #[test]
+    fn a_rope_found_that_leaves_seen_rope_out_is_counted_by_its_seen_nodes() {
+        let reach = UNEXPLAINED_REACH * 0.02;
+        let (_, nodes) = rope_and_nodes(1.0);
+        let visible = [true; 24];
+        // The whole rope found again, 1 cm off (a coarse state): nothing left out.
+        assert_eq!(
+            seen_left_out(&nodes, &visible, &moved_across(&nodes, 0.01), reach),
+            0
+        );
+        // Only its first half found, with something else beyond it: the
+        // seen nodes past the reach of that half are left out...
+        let half: Vec<Vec3> = nodes.iter().take(12).copied().collect();
+        let mut other = half.clone();
+        other.extend((1..6).map(|k| Vec3::new(0.48, 0.05 * k as f64, 1.0)));
+        let left = seen_left_out(&nodes, &visible, &other, reach);
+        assert_eq!(left, 12);
+        // ...unless the step did not see them: hidden nodes may be anywhere.
+        let mut seen_half = visible;
+        seen_half[12..].fill(false);
+        assert_eq!(seen_left_out(&nodes, &seen_half, &other, reach), 0);
     }
 }
