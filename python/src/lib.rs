@@ -200,6 +200,13 @@ struct StepResult {
     reason: Option<String>,
     /// The state was found again from the images on this frame.
     recovered: bool,
+    /// What came of the recovery tests after this frame's step: "agreed",
+    /// "waited", "nothing_found", "other_thickness", "beside_the_rope",
+    /// "leaves_seen_rope_out", "recovered"; None when no step ran.
+    verdict: Option<String>,
+    /// The recovery tests that fired after the step: "stretched",
+    /// "free_space", "unexplained" (empty when none did).
+    fired: Vec<String>,
     /// Segmentation, ms.
     segment_ms: f64,
     /// Point cloud, ms.
@@ -362,6 +369,8 @@ fn step_result(py: Python<'_>, output: &FrameOutput, times: [f64; 4]) -> PyResul
             _ => record.reason,
         },
         recovered: record.recovered,
+        verdict: record.checks.as_ref().map(|c| c.verdict.clone()),
+        fired: record.checks.map(|c| c.fired).unwrap_or_default(),
         segment_ms: times[0],
         cloud_ms: times[1],
         track_ms: times[2],

@@ -109,6 +109,8 @@ def test_arrays_as_pyrealsense2_gives_them():
     assert r.visible.dtype == np.bool_ and r.visible.shape == (24,)
     assert not r.lost and r.reason is None
     assert r.total_ms >= r.track_ms >= 0.0
+    # The first frame initialised: no step, no recovery tests.
+    assert r.verdict is None and r.fired == []
 
 
 def test_a_recovered_frame_says_which_test_contradicted_the_state():
@@ -122,6 +124,10 @@ def test_a_recovered_frame_says_which_test_contradicted_the_state():
     r = tracker.step(np.roll(color, 150, axis=1), np.roll(depth, 150, axis=1))
     assert r.recovered and not r.lost
     assert "unexplained" in r.reason
+    assert r.verdict == "recovered" and r.fired == ["unexplained"]
+    # The next frame, where the rope now is, agrees with the state.
+    again = tracker.step(np.roll(color, 150, axis=1), np.roll(depth, 150, axis=1))
+    assert again.verdict == "agreed" and again.fired == []
 
 
 @pytest.mark.parametrize(

@@ -18,7 +18,7 @@ use crate::step::StepOutput;
 use crate::upe::emerging;
 
 impl Tracker {
-    /// Checks the step's `out` against the images: a state that
+    /// Checks the step's `out` (from the `previous` nodes) against the images: a state that
     /// contradicts them is replaced by the rope found again (as often as
     /// the back-off allows, by a rope as thick as the one tracked), unless
     /// only the unexplained cloud fired and the rope found is the one
@@ -29,7 +29,7 @@ impl Tracker {
         &mut self,
         frame: &Frame<'_>,
         obs: &Observation,
-        out: &StepOutput<StepReports>,
+        (previous, out): (&[Vec3], &StepOutput<StepReports>),
         not_rope: &[Vec3],
     ) -> ControlFlow<FrameOutput, (Vec<Vec3>, Judgement)> {
         let measured = self.contradiction(&out.nodes, &obs.cloud, &out.report, not_rope);
@@ -54,12 +54,17 @@ impl Tracker {
         if !self.as_thick_as_tracked(&init) {
             return kept(Verdict::OtherThickness);
         }
-        // A rope found that leaves out rope the state sees is not the
-        // whole rope: replacing the state would lose what is seen. Not
-        // where ropes alike share the frame: a node may be seen on another.
+        // A state that sees most of its rope is mostly right: a rope found
+        // that leaves out rope it sees is not the whole rope, and replacing
+        // the state would lose what is seen. Seen: the previous nodes with
+        // this frame's rope points beside them (the step may have dragged
+        // them off). Not where ropes alike share the frame: a node may be
+        // seen on another.
+        let seen = out.visible.iter().filter(|&&v| v).count();
+        let sees_most = 2 * seen > out.visible.len();
         let alike = obs.others.as_ref().is_some_and(|o| o.alike);
         let reach = self.unexplained_reach();
-        if !alike && seen_left_out(&out.nodes, &out.visible, &init.nodes, reach) > 0 {
+        if sees_most && !alike && seen_left_out(previous, &out.visible, &init.nodes, reach) > 0 {
             return kept(Verdict::LeavesSeenRopeOut);
         }
         let step = (&out.nodes[..], &out.visible[..]);

@@ -641,7 +641,7 @@ impl Tracker {
         let camera = self.camera;
         let input = self.step_input(&camera, frame, obs, &prev, &classes, &not_rope);
         let out = self.stepper.step(&input, &self.params);
-        let (beside, judgement) = match self.judge_step(frame, obs, &out, &not_rope) {
+        let (beside, judgement) = match self.judge_step(frame, obs, (&prev, &out), &not_rope) {
             core::ops::ControlFlow::Continue(kept) => kept,
             core::ops::ControlFlow::Break(again) => return again,
         };

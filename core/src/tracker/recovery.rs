@@ -212,9 +212,9 @@ pub struct Judgement {
     pub cloud_points: usize,
 }
 
-/// How many of the `visible` `nodes` (the ones a step saw on rope
-/// points) lie farther than `reach` from the axis through `found`, the
-/// nodes of a rope found again: seen rope that rope would leave out.
+/// How many of the `visible` `nodes` (nodes with rope points beside them
+/// in this frame) lie farther than `reach` from the axis through `found`,
+/// the nodes of a rope found again: seen rope that rope would leave out.
 pub fn seen_left_out(nodes: &[Vec3], visible: &[bool], found: &[Vec3], reach: f64) -> usize {
     let seen: Vec<Vec3> = nodes
         .iter()

@@ -51,13 +51,17 @@ class Intrinsics:
 
 @final
 class StepResult:
-    """One step: nodes (M x 3 float64, metres, camera frame), visibility, loss or recovery and why (`reason`), times (ms)."""
+    """One step: nodes (M x 3 float64, metres, camera frame), visibility, loss or recovery and why (`reason`), what came of the recovery tests (`verdict`, the tests that `fired`), times (ms)."""
 
     nodes: npt.NDArray[np.float64]
     visible: npt.NDArray[np.bool_]
     lost: bool
     reason: Optional[str]
     recovered: bool
+    verdict: Optional[str]
+    """"agreed", "waited", "nothing_found", "other_thickness", "beside_the_rope", "leaves_seen_rope_out" or "recovered"; None when no step ran (initialised or lost)."""
+    fired: list[str]
+    """The recovery tests that fired after the step: "stretched", "free_space", "unexplained"."""
     segment_ms: float
     cloud_ms: float
     track_ms: float
