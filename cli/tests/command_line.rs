@@ -284,6 +284,20 @@ fn a_state_that_keeps_contradicting_the_images_is_not_reinitialised_every_frame(
             verdict(f).as_deref() == Some("agreed"),
             "frame {i}"
         );
+        // What a search found is said where there was one and a rope in it.
+        let searched_and_found = !matches!(
+            verdict(f).as_deref(),
+            Some("agreed" | "waited" | "nothing_found")
+        );
+        let found = &f["checks"]["found"];
+        assert_eq!(found.is_object(), searched_and_found, "frame {i}: {found}");
+        if searched_and_found {
+            assert!(
+                found["length"].as_f64().is_some_and(|l| l > 0.0),
+                "frame {i}: {found}"
+            );
+            assert!(found["seen_left_out"].is_u64(), "frame {i}: {found}");
+        }
     }
     let said = String::from_utf8_lossy(&o.stderr);
     assert!(said.contains("a recovery test fired on"), "{said}");

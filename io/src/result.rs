@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 use upetrack::perception::initialisation::InitReport;
-use upetrack::tracker::{Contradiction, Judgement};
+use upetrack::tracker::{Contradiction, FoundAgain, Judgement};
 use upetrack::Params;
 
 /// One frame of a result.
@@ -81,6 +81,10 @@ pub struct ChecksRecord {
     /// The measures.
     #[serde(flatten)]
     pub measured: Contradiction,
+    /// The rope found when the images were searched: `{length, diameter,
+    /// seen_left_out}` (metres; the seen nodes it leaves out).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub found: Option<FoundAgain>,
 }
 
 impl ChecksRecord {
@@ -91,6 +95,7 @@ impl ChecksRecord {
             fired: j.measured.fired().map(String::from).collect(),
             cloud_points: j.cloud_points,
             measured: j.measured,
+            found: j.found,
         }
     }
 }

@@ -7,7 +7,8 @@ use alloc::vec::Vec;
 use core::ops::ControlFlow;
 
 use super::recovery::{
-    beside_rope_found, seen_left_out, Contradiction, Judgement, Verdict, UNEXPLAINED_REACH,
+    beside_rope_found, seen_left_out, Contradiction, FoundAgain, Judgement, Verdict,
+    UNEXPLAINED_REACH,
 };
 use super::stepper::StepReports;
 use super::{FrameOutput, FrameStatus, Observation, Tracker};
@@ -33,26 +34,33 @@ impl Tracker {
         not_rope: &[Vec3],
     ) -> ControlFlow<FrameOutput, (Vec<Vec3>, Judgement)> {
         let measured = self.contradiction(&out.nodes, &obs.cloud, &out.report, not_rope);
-        let judged = |verdict| Judgement {
+        let judged = |verdict, found| Judgement {
             measured,
             verdict,
             cloud_points: obs.cloud.len(),
+            found,
         };
-        let kept = |verdict| ControlFlow::Continue((Vec::new(), judged(verdict)));
+        let kept = |verdict, found| ControlFlow::Continue((Vec::new(), judged(verdict, found)));
         if !measured.contradicts() {
             self.recovery.agreed();
-            return kept(Verdict::Agreed);
+            return kept(Verdict::Agreed, None);
         }
         if !self.recovery.may_recover() {
-            return kept(Verdict::Waited);
+            return kept(Verdict::Waited, None);
         }
         let attempt = self.find_rope(frame, obs).ok();
         self.recovery.recovered();
         let Some(init) = attempt else {
-            return kept(Verdict::NothingFound);
+            return kept(Verdict::NothingFound, None);
         };
+        let reach = self.unexplained_reach();
+        let found = Some(FoundAgain {
+            length: init.length,
+            diameter: init.diameter(),
+            seen_left_out: seen_left_out(previous, &out.visible, &init.nodes, reach),
+        });
         if !self.as_thick_as_tracked(&init) {
-            return kept(Verdict::OtherThickness);
+            return kept(Verdict::OtherThickness, found);
         }
         // A state that sees most of its rope is mostly right: a rope found
         // that leaves out rope it sees is not the whole rope, and replacing
@@ -63,17 +71,16 @@ impl Tracker {
         let seen = out.visible.iter().filter(|&&v| v).count();
         let sees_most = 2 * seen > out.visible.len();
         let alike = obs.others.as_ref().is_some_and(|o| o.alike);
-        let reach = self.unexplained_reach();
-        if sees_most && !alike && seen_left_out(previous, &out.visible, &init.nodes, reach) > 0 {
-            return kept(Verdict::LeavesSeenRopeOut);
+        if sees_most && !alike && found.is_some_and(|f| f.seen_left_out > 0) {
+            return kept(Verdict::LeavesSeenRopeOut, found);
         }
         let step = (&out.nodes[..], &out.visible[..]);
         match self.beside_the_rope_found(step, &init, &obs.cloud, &measured) {
-            Some(beside) => ControlFlow::Continue((beside, judged(Verdict::BesideTheRope))),
+            Some(beside) => ControlFlow::Continue((beside, judged(Verdict::BesideTheRope, found))),
             None => {
                 let mut again = self.adopt(init, frame, obs);
                 again.status = FrameStatus::Recovered(measured);
-                again.judgement = Some(judged(Verdict::Recovered));
+                again.judgement = Some(judged(Verdict::Recovered, found));
                 ControlFlow::Break(again)
             }
         }

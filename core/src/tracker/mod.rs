@@ -43,8 +43,9 @@ mod stepper;
 
 pub(crate) use camera::CameraFollowing;
 pub use recovery::{
-    beside_rope_found, Contradiction, Judgement, RecoveryBackoff, Verdict, MAX_RECOVERY_WAIT,
-    MIN_NODES_IN_FREE_SPACE, STRETCH_LIMIT, UNEXPLAINED_LIMIT, UNEXPLAINED_REACH,
+    beside_rope_found, Contradiction, FoundAgain, Judgement, RecoveryBackoff, Verdict,
+    MAX_RECOVERY_WAIT, MIN_NODES_IN_FREE_SPACE, STRETCH_LIMIT, UNEXPLAINED_LIMIT,
+    UNEXPLAINED_REACH,
 };
 pub use stepper::{StepReports, Stepper};
 

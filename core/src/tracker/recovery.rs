@@ -210,6 +210,24 @@ pub struct Judgement {
     pub verdict: Verdict,
     /// Cloud points the tests read.
     pub cloud_points: usize,
+    /// The rope found when the images were searched (`None` when they
+    /// were not, or held no rope).
+    pub found: Option<FoundAgain>,
+}
+
+/// A rope found again after a step that contradicted the images, taken or
+/// not: what a refused recovery was offered.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct FoundAgain {
+    /// Its length, metres.
+    pub length: f64,
+    /// Its diameter as the rope test measures it, metres (`None` when not
+    /// measured).
+    pub diameter: Option<f64>,
+    /// The nodes the state sees (visible, with rope points beside them)
+    /// that it leaves out.
+    pub seen_left_out: usize,
 }
 
 /// How many of the `visible` `nodes` (nodes with rope points beside them
