@@ -44,6 +44,14 @@ export function updateStatsPanel(s = pageStats()) {
   $('stats-panel').title = `Medians over the last ${s.frames} frames; "frame" is segmentation + cloud + tracking`;
 }
 
+// A recovery test that fired on a frame whose state was kept, and why it
+// was kept (the record's `checks`); a recovered frame's reason says the rest.
+function checksText(r) {
+  const c = r && r.record && r.record.checks;
+  if (!c || !c.fired.length || c.verdict === 'recovered') return '';
+  return `   ${c.fired.join(', ')} fired: ${c.verdict.replace(/_/g, ' ')}`;
+}
+
 export function updateLabels(page = pageStats()) {
   const n = state.seq.info.color_files.length;
   $('timeline').value = String(state.index);
@@ -52,7 +60,7 @@ export function updateLabels(page = pageStats()) {
   const tracked = state.results.slice(0, state.tracked + 1).filter(Boolean);
   const fps = page.fps;
   const lines = [
-    `sequence ${state.seq.name}   frame ${state.index}   status ${r ? r.status : '-'}${r && r.reason ? ` (${r.reason})` : ''}`,
+    `sequence ${state.seq.name}   frame ${state.index}   status ${r ? r.status : '-'}${r && r.reason ? ` (${r.reason})` : ''}${checksText(r)}`,
     r ? `tracking ${r.trackMs.toFixed(2)} ms   segmentation+cloud+tracking ${r.totalMs.toFixed(2)} ms   decoding ${r.decodeMs.toFixed(1)} ms   median tracking ${fixed(stats(tracked.map((x) => x.trackMs)).median, 2)} ms` : '',
     `display ${fixed(fps, 1)} frames/s   visible nodes ${r ? r.visible.filter((v) => v).length : '-'} of ${r ? r.visible.length : '-'}`,
     r && r.error.length ? `frame error ${r.error[0].toFixed(2)} mm, ${r.error[1].toFixed(2)} px (${ALGORITHM_NAMES[state.params.algorithm]}, red)` : 'no ground truth for this frame',
