@@ -184,7 +184,7 @@ fn cmd_track(args: &TrackArgs) -> Result<(), CliError> {
 fn report_checks(result: &upetrack_io::result::TrackResult) {
     let mut verdicts: Vec<(&str, usize)> = Vec::new();
     for c in result.frames.iter().filter_map(|f| f.checks.as_ref()) {
-        if c.fired.is_empty() {
+        if c.tests.fired.is_empty() {
             continue;
         }
         match verdicts.iter_mut().find(|(v, _)| *v == c.verdict) {

@@ -72,15 +72,15 @@ pub struct ChecksRecord {
     /// `agreed` (no test fired), `waited` (recoveries back off),
     /// `nothing_found`, `other_thickness` (the rope found is not as thick
     /// as the one tracked), `beside_the_rope` (what contradicted lies
-    /// beside the rope tracked), `recovered`.
+    /// beside the rope tracked), `leaves_seen_rope_out` (the rope found
+    /// leaves out rope the state sees), `recovered`.
     pub verdict: String,
-    /// The tests that fired, as in [`RecoveryRecord::fired`].
-    pub fired: Vec<String>,
+    /// The tests that fired and what they measured, as on a recovered
+    /// frame.
+    #[serde(flatten)]
+    pub tests: RecoveryRecord,
     /// Cloud points the tests read.
     pub cloud_points: usize,
-    /// The measures.
-    #[serde(flatten)]
-    pub measured: Contradiction,
     /// The rope found when the images were searched: `{length, diameter,
     /// seen_left_out}` (metres; the seen nodes it leaves out).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -92,9 +92,8 @@ impl ChecksRecord {
     pub fn of(j: &Judgement) -> Self {
         Self {
             verdict: j.verdict.name().to_string(),
-            fired: j.measured.fired().map(String::from).collect(),
+            tests: RecoveryRecord::of(&j.measured),
             cloud_points: j.cloud_points,
-            measured: j.measured,
             found: j.found,
         }
     }

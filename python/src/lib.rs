@@ -370,7 +370,7 @@ fn step_result(py: Python<'_>, output: &FrameOutput, times: [f64; 4]) -> PyResul
         },
         recovered: record.recovered,
         verdict: record.checks.as_ref().map(|c| c.verdict.clone()),
-        fired: record.checks.map(|c| c.fired).unwrap_or_default(),
+        fired: record.checks.map(|c| c.tests.fired).unwrap_or_default(),
         segment_ms: times[0],
         cloud_ms: times[1],
         track_ms: times[2],

@@ -54,13 +54,13 @@ impl Tracker {
             return kept(Verdict::NothingFound, None);
         };
         let reach = self.unexplained_reach();
-        let found = Some(FoundAgain {
+        let found = FoundAgain {
             length: init.length,
             diameter: init.diameter(),
             seen_left_out: seen_left_out(previous, &out.visible, &init.nodes, reach),
-        });
+        };
         if !self.as_thick_as_tracked(&init) {
-            return kept(Verdict::OtherThickness, found);
+            return kept(Verdict::OtherThickness, Some(found));
         }
         // A state that sees most of its rope is mostly right: a rope found
         // that leaves out rope it sees is not the whole rope, and replacing
@@ -71,16 +71,18 @@ impl Tracker {
         let seen = out.visible.iter().filter(|&&v| v).count();
         let sees_most = 2 * seen > out.visible.len();
         let alike = obs.others.as_ref().is_some_and(|o| o.alike);
-        if sees_most && !alike && found.is_some_and(|f| f.seen_left_out > 0) {
-            return kept(Verdict::LeavesSeenRopeOut, found);
+        if sees_most && !alike && found.seen_left_out > 0 {
+            return kept(Verdict::LeavesSeenRopeOut, Some(found));
         }
         let step = (&out.nodes[..], &out.visible[..]);
         match self.beside_the_rope_found(step, &init, &obs.cloud, &measured) {
-            Some(beside) => ControlFlow::Continue((beside, judged(Verdict::BesideTheRope, found))),
+            Some(beside) => {
+                ControlFlow::Continue((beside, judged(Verdict::BesideTheRope, Some(found))))
+            }
             None => {
                 let mut again = self.adopt(init, frame, obs);
                 again.status = FrameStatus::Recovered(measured);
-                again.judgement = Some(judged(Verdict::Recovered, found));
+                again.judgement = Some(judged(Verdict::Recovered, Some(found)));
                 ControlFlow::Break(again)
             }
         }

@@ -155,13 +155,9 @@ impl Contradiction {
     }
 }
 
-/// What came of a step once the recovery tests had read it.
+/// What came of a step once the recovery tests had read it (named in the
+/// result JSON by [`Verdict::name`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[cfg_attr(
-    feature = "serde",
-    derive(serde::Serialize, serde::Deserialize),
-    serde(rename_all = "snake_case")
-)]
 pub enum Verdict {
     /// No test fired: the state agrees with the images.
     Agreed,
