@@ -159,9 +159,9 @@ fn tables(
             fmt(share(lost), 1),
         );
     }
-    s += "\nThe whole rope's length (each sequence's largest relative error of the node polyline's length against the true centre line's, over its frames), the visible nodes' mean offset from the true centre line along the viewing ray (positive: behind it), the ends seen (each sequence's mean distance from an end node in view to the true rope's tip, and how much centre line lies between the tip and the node: how far short of it the tracked rope stops) and the hidden ends (the same distance for an end node not seen), over the sequences:\n\n\
-         | algorithm | length error max: median | p90 | max | ray offset mm: median | p10 | p90 | median of its size | end mm: median | p90 | short of the tip mm: median | hidden end mm: median | p90 |\n\
-         |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    s += "\nThe whole rope's length (each sequence's largest relative error of the node polyline's length against the true centre line's, over its frames, and how many sequences have a frame above 5 %; then the same against the true centre line sampled at the tracker's node count by arc length, whose polyline cuts the bends as the nodes' must), the visible nodes' mean offset from the true centre line along the viewing ray (positive: behind it), the ends seen (each sequence's mean distance from an end node in view to the true rope's tip, and how much centre line lies between the tip and the node: how far short of it the tracked rope stops) and the hidden ends (the same distance for an end node not seen), over the sequences:\n\n\
+         | algorithm | length error max: median | p90 | max | above 5 % | at the node count: median | p90 | above 5 % | ray offset mm: median | p10 | p90 | median of its size | end mm: median | p90 | short of the tip mm: median | hidden end mm: median | p90 |\n\
+         |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for a in algorithms {
         let mine: Vec<&Row> = rows
             .iter()
@@ -171,6 +171,11 @@ fn tables(
             .iter()
             .map(|r| 100.0 * r.summary.length_error_max)
             .collect();
+        let sampled: Vec<f64> = mine
+            .iter()
+            .map(|r| 100.0 * r.summary.length_error_sampled_max)
+            .collect();
+        let above = |v: &[f64]| v.iter().filter(|&&e| e > 5.0).count();
         let offset: Vec<f64> = mine
             .iter()
             .map(|r| r.summary.visible_ray_offset_mm)
@@ -180,11 +185,15 @@ fn tables(
         let short: Vec<f64> = mine.iter().map(|r| r.summary.end_arc_mm).collect();
         let hidden: Vec<f64> = mine.iter().map(|r| r.summary.hidden_end_mm).collect();
         s += &format!(
-            "| {} | {} % | {} % | {} % | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            "| {} | {} % | {} % | {} % | {} | {} % | {} % | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
             a.name(),
             fmt(quantile(&length, 0.5), 1),
             fmt(quantile(&length, 0.9), 1),
             fmt(quantile(&length, 1.0), 1),
+            above(&length),
+            fmt(quantile(&sampled, 0.5), 1),
+            fmt(quantile(&sampled, 0.9), 1),
+            above(&sampled),
             fmt(quantile(&offset, 0.5), 2),
             fmt(quantile(&offset, 0.1), 2),
             fmt(quantile(&offset, 0.9), 2),

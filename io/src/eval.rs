@@ -143,6 +143,11 @@ pub struct Summary {
     /// polyline) against the true centre line's, over the frames tracked
     /// (0.03 = 3 %).
     pub length_error_max: f64,
+    /// The same against the true centre line sampled at the tracker's node
+    /// count by arc length (its polyline cuts the bends as the nodes' must):
+    /// the part of [`Summary::length_error_max`] that is no chord of a
+    /// bend.
+    pub length_error_sampled_max: f64,
     /// Mean signed offset of the visible nodes from the true centre line
     /// along the viewing ray, millimetres (positive: behind it, farther
     /// from the camera), over every visible node of every frame tracked.
@@ -371,6 +376,7 @@ pub fn summarise_tracks(
     let (mut mm, mut px, mut occ_mm, mut occ_px, mut clear) =
         (vec![], vec![], vec![], vec![], vec![]);
     let (mut length_errors, mut whole_length_errors, mut ray_offsets) = (vec![], vec![], vec![]);
+    let mut sampled_length_errors = vec![];
     let (mut ends, mut hidden_ends): (Vec<EndOffset>, Vec<EndOffset>) = (vec![], vec![]);
     let (mut lost, mut recovered, mut last_mm) = (0, 0, f64::NAN);
     for t in tracks {
@@ -401,8 +407,14 @@ pub fn summarise_tracks(
             let true_length = upetrack::polyline::polyline_length(gt);
             length_errors.extend(hidden_length_error(&nodes, &f.visible, true_length));
             if true_length > 0.0 && nodes.len() > 1 {
-                whole_length_errors
-                    .push((upetrack::polyline::polyline_length(&nodes) / true_length - 1.0).abs());
+                let length = upetrack::polyline::polyline_length(&nodes);
+                whole_length_errors.push((length / true_length - 1.0).abs());
+                let sampled = upetrack::polyline::polyline_length(
+                    &upetrack::polyline::resample_uniform(gt, nodes.len()),
+                );
+                if sampled > 0.0 {
+                    sampled_length_errors.push((length / sampled - 1.0).abs());
+                }
             }
             for (p, _) in nodes.iter().zip(&f.visible).filter(|(_, v)| **v) {
                 ray_offsets.extend(ray_offset(p, gt).map(|o| o * 1000.0));
@@ -438,6 +450,7 @@ pub fn summarise_tracks(
         hidden_length_error_max: largest(&length_errors),
         hidden_length_error_mean: mean(&length_errors),
         length_error_max: largest(&whole_length_errors),
+        length_error_sampled_max: largest(&sampled_length_errors),
         visible_ray_offset_mm: mean(&ray_offsets),
         end_mm: 1000.0 * mean(&ends.iter().map(|e| e.distance).collect::<Vec<_>>()),
         end_arc_mm: 1000.0 * mean(&ends.iter().map(|e| e.arc).collect::<Vec<_>>()),

@@ -347,7 +347,7 @@ pub const PARAMETERS: &[ParamInfo] = &[
         "follow_emerged_ends",
         Upetrack,
         "emerged ends",
-        "A hidden end follows rope in view that came out from under its occluder and no node explains (off: the paper's step)",
+        "A hidden end follows rope in view that came out from under its occluder and no node explains, and a rope found short goes on along such rope past an end (off: the paper's step)",
         ParamKind::Bool,
     ),
     p(

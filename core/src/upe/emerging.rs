@@ -7,6 +7,7 @@
 use alloc::vec::Vec;
 
 use super::length::{along, end_run_from_anchor, set_end_run, taut_from_pulled_end};
+use super::slide::HiddenEnds;
 use crate::curve::RopeCurve;
 use crate::math::{self, NearNodes, Vec3};
 use crate::perception::evidence::OCCLUDER_MARGIN;
@@ -75,6 +76,17 @@ pub fn near_not_rope(p: &Vec3, not_rope: &[Vec3], rest_spacing: f64) -> bool {
         .any(|q| (p - q).norm_squared() <= link * link)
 }
 
+/// `true` when more than [`NOT_ROPE_SHARE`] of `points` (one piece) lie
+/// near things seen beside the rope ([`near_not_rope`]): the piece is that
+/// thing.
+fn mostly_not_rope(points: &[Vec3], not_rope: &[Vec3], rest_spacing: f64) -> bool {
+    let known = points
+        .iter()
+        .filter(|p| near_not_rope(p, not_rope, rest_spacing))
+        .count();
+    (known as f64) > NOT_ROPE_SHARE * points.len() as f64
+}
+
 /// Adds to `memory` the `points` (unexplained rope-coloured points on a
 /// frame where the rope was wholly seen) not already within half a
 /// [`PIECE_LINK_SPACINGS`] link of a remembered one, up to
@@ -98,11 +110,14 @@ pub fn remember_not_rope(memory: &mut Vec<Vec3>, points: &[Vec3], rest_spacing: 
     }
 }
 
-/// The `points` no hidden run of the rope could reach with its rest length
-/// (`rest_spacing` per node): farther from the anchor of a run at an end
-/// than its nodes' rope, and from the two anchors of a run in the middle
-/// than the rope between them. Unexplained rope-coloured points of these
-/// are something beside the rope, not rope of it.
+/// The `points` no end or hidden run of the rope could reach with its
+/// rest length (`rest_spacing` per node): farther from the anchor of a
+/// run at an end than its nodes' rope, and from the two anchors of a run
+/// in the middle than the rope between them, each with the length the
+/// nodes' polyline lacks of the rest length added (rope the state holds
+/// nowhere, which an end can take: [`follow_rope_past_ends`]); a seen end
+/// reaches that much past its node. Unexplained rope-coloured points of
+/// these are something beside the rope, not rope of it.
 pub fn beyond_hidden_reach(
     nodes: &[Vec3],
     known: &[bool],
@@ -113,19 +128,23 @@ pub fn beyond_hidden_reach(
     if known.len() != m || !known.iter().any(|&k| k) {
         return Vec::new();
     }
+    let spare = (rest_spacing * m.saturating_sub(1) as f64 - polyline_length(nodes)).max(0.0);
     let runs = super::slide::hidden_runs(known);
+    let to = |p: &Vec3, i: usize| math::norm(&(p - nodes[i]));
     let reaches = |p: &Vec3| {
-        runs.iter().any(|r| {
-            // A run of `k` nodes: `k` spacings of rope past an end's
-            // anchor, `k + 1` between a middle run's two.
-            let k = (r.end - r.start) as f64;
-            let to = |i: usize| math::norm(&(p - nodes[i]));
-            match (r.start.checked_sub(1), (r.end < m).then_some(r.end)) {
-                (Some(a), Some(b)) => to(a) + to(b) <= rest_spacing * (k + 1.0),
-                (Some(a), None) | (None, Some(a)) => to(a) <= rest_spacing * k,
-                (None, None) => true,
-            }
-        })
+        let seen_end = |i: usize| known[i] && to(p, i) <= spare;
+        seen_end(0)
+            || seen_end(m - 1)
+            || runs.iter().any(|r| {
+                // A run of `k` nodes: `k` spacings of rope past an end's
+                // anchor, `k + 1` between a middle run's two.
+                let k = (r.end - r.start) as f64;
+                match (r.start.checked_sub(1), (r.end < m).then_some(r.end)) {
+                    (Some(a), Some(b)) => to(p, a) + to(p, b) <= rest_spacing * (k + 1.0) + spare,
+                    (Some(a), None) | (None, Some(a)) => to(p, a) <= rest_spacing * k + spare,
+                    (None, None) => true,
+                }
+            })
     };
     points.iter().filter(|p| !reaches(p)).copied().collect()
 }
@@ -202,6 +221,9 @@ pub struct EmergedReport {
     pub runs: usize,
     /// Length of the longest piece taken, metres.
     pub piece_length: f64,
+    /// What a rope found short took past its ends
+    /// ([`follow_rope_past_ends`]).
+    pub past_ends: PastEndsReport,
 }
 
 /// A piece of rope in view that no node explains, as a polyline from one
@@ -370,13 +392,7 @@ pub fn follow_emerged_ends(
                 .any(|p| seen.iter().any(|q| (p - q).norm_squared() <= reach * reach))
         })
         // Nor is a thing seen beside the rope when it was wholly in view.
-        .filter(|set| {
-            let known = set
-                .iter()
-                .filter(|p| near_not_rope(p, not_rope, rest_spacing))
-                .count();
-            (known as f64) <= NOT_ROPE_SHARE * set.len() as f64
-        })
+        .filter(|set| !mostly_not_rope(set, not_rope, rest_spacing))
         .filter_map(|set| Piece::of(&set, link))
         .filter(|piece| piece.length >= MIN_PIECE_SPACINGS * rest_spacing)
         .collect();
@@ -449,6 +465,117 @@ fn fits(
     }
     let exit = EXIT_GAP_SPACINGS * rest_spacing;
     (hidden_near(&near, exit) && !hidden_near(&far, exit) && on_surface(&line)).then_some(line)
+}
+
+/// What [`follow_rope_past_ends`] took, metres of rope added at each end.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct PastEndsReport {
+    /// Added before node 0 (the piece and the gap to it).
+    pub head: f64,
+    /// Added after node `M - 1`.
+    pub tail: f64,
+}
+
+/// A rope found shorter than its rest length follows rope in view past its
+/// ends (issue 28): after a fast pull EM leaves the pulled end behind, its
+/// nodes bunched along what they saw, and the rope that went on lies in
+/// view with no node near it (past a rope-coloured box it went under, or
+/// where a hand that hid it has gone). A piece of the `cloud` that no
+/// node explains (farther than `reach` from every node; not, for the most
+/// part, a thing `not_rope` saw beside the rope), at least
+/// [`MIN_PIECE_SPACINGS`] long, every point of which lies nearest an end
+/// node or a node of the hidden run at that end, on the surface
+/// (`on_surface`), and which the length the rope lacks can reach (the gap
+/// from the end node and the piece together no longer than the shortfall
+/// against `rest_length`, give or take a spacing or [`REST_LENGTH_SLACK`]
+/// of the rope, the larger) is where that end went: the polyline goes on
+/// from the end node to the piece's near tip and along it. The longest
+/// such piece at each end; the head first, the tail with what is left.
+/// `nodes` is the polyline of the rope's `count` nodes (with what
+/// [`super::length::extend_short_ends`] added at a seen end), `hidden`
+/// its hidden ends, `rest_spacing` the rest length over `count - 1`.
+/// Returns the polyline with the pieces (to be spread evenly over the
+/// rope's nodes: the bunched ones slide along it) and what was added.
+pub fn follow_rope_past_ends(
+    nodes: &[Vec3],
+    hidden: HiddenEnds,
+    view: &InView<'_>,
+    reach: f64,
+    rest_spacing: f64,
+    count: usize,
+) -> (Vec<Vec3>, PastEndsReport) {
+    let mut report = PastEndsReport::default();
+    let m = nodes.len();
+    let spacing = rest_spacing;
+    let rest_length = spacing * count.saturating_sub(1) as f64;
+    if m < 3 || !(reach > 0.0) || !(rest_length > 0.0) || !nodes.iter().all(math::is_finite) {
+        return (nodes.to_vec(), report);
+    }
+    let mut shortfall = rest_length - polyline_length(nodes);
+    if !(shortfall > super::length::MIN_SHORTFALL_SPACINGS * spacing) {
+        return (nodes.to_vec(), report);
+    }
+    let link = PIECE_LINK_SPACINGS * spacing;
+    let far = unexplained_points(nodes, view.cloud, reach);
+    if far.is_empty() {
+        return (nodes.to_vec(), report);
+    }
+    // The nodes an end's piece may lie nearest: the end node and the
+    // hidden run at that end.
+    let (head, tail) = (hidden.head.max(1), hidden.tail.max(1));
+    let nearest = |p: &Vec3| {
+        (0..m)
+            .min_by(|&a, &b| {
+                (p - nodes[a])
+                    .norm_squared()
+                    .total_cmp(&(p - nodes[b]).norm_squared())
+            })
+            .unwrap_or(0)
+    };
+    let mut pieces: [Vec<Piece>; 2] = [Vec::new(), Vec::new()];
+    for set in connected_sets(&far, link) {
+        let points: Vec<Vec3> = set.into_iter().map(|i| far[i]).collect();
+        if mostly_not_rope(&points, view.not_rope, spacing) {
+            continue;
+        }
+        let ends: Vec<usize> = points.iter().map(nearest).collect();
+        let side = if ends.iter().all(|&k| k < head) {
+            0
+        } else if ends.iter().all(|&k| k + tail >= m) {
+            1
+        } else {
+            continue;
+        };
+        if let Some(piece) =
+            Piece::of(&points, link).filter(|piece| piece.length >= MIN_PIECE_SPACINGS * spacing)
+        {
+            pieces[side].push(piece);
+        }
+    }
+    let slack = spacing.max(REST_LENGTH_SLACK * rest_length);
+    let mut taken: [Option<Vec<Vec3>>; 2] = [None, None];
+    for (side, end) in [(0, nodes[0]), (1, nodes[m - 1])] {
+        pieces[side].sort_by(|a, b| b.length.total_cmp(&a.length));
+        let choice = pieces[side].iter().find_map(|piece| {
+            let line = piece.line_out_from(&end);
+            let added = math::norm(&(line[0] - end)) + piece.length;
+            (added <= shortfall + slack && (view.on_surface)(&line)).then_some((line, added))
+        });
+        if let Some((line, added)) = choice {
+            shortfall -= added;
+            match side {
+                0 => report.head = added,
+                _ => report.tail = added,
+            }
+            taken[side] = Some(line);
+        }
+    }
+    let [before, after] = taken;
+    let mut out = Vec::with_capacity(m);
+    out.extend(before.into_iter().flat_map(|line| line.into_iter().rev()));
+    out.extend_from_slice(nodes);
+    out.extend(after.into_iter().flatten());
+    (out, report)
 }
 
 #[cfg(test)]
@@ -642,27 +769,133 @@ mod tests {
         assert_eq!(r.runs, 1);
     }
 
+    /// [`follow_rope_past_ends`] with a reach of 1.5 cm, a rest spacing of
+    /// 1 cm and 20 nodes (a rest length of 19 cm), every piece on the
+    /// table and nothing hidden around.
+    fn past(
+        nodes: &[Vec3],
+        hidden: HiddenEnds,
+        cloud: &[Vec3],
+        not_rope: &[Vec3],
+    ) -> (Vec<Vec3>, PastEndsReport) {
+        let view = InView {
+            cloud,
+            not_rope,
+            hidden_near: &|_: &Vec3, _: f64| false,
+            on_surface: &on_table,
+        };
+        follow_rope_past_ends(nodes, hidden, &view, 0.015, 0.01, 20)
+    }
+
+    /// Twenty nodes bunched 8 mm apart along x from 0 (15.2 cm of a 19 cm
+    /// rope: 3.8 cm held nowhere).
+    fn bunched() -> Vec<Vec3> {
+        (0..20)
+            .map(|i| Vec3::new(0.008 * i as f64, 0.0, 0.6))
+            .collect()
+    }
+
+    const SEEN: HiddenEnds = HiddenEnds { head: 0, tail: 0 };
+
+    #[test]
+    fn a_short_rope_follows_rope_in_view_past_its_end() {
+        // The rope goes on in view to x = 19 cm: past node 19 (15.2) and
+        // its reach (16.7) lie 2.3 cm of rope no node explains.
+        let cloud = points(Vec3::new(0.0, 0.0, 0.6), Vec3::new(0.19, 0.0, 0.6));
+        let (line, report) = past(&bunched(), SEEN, &cloud, &[]);
+        assert_eq!(report.head, 0.0);
+        assert!((report.tail - 0.038).abs() < 1e-3, "{report:?}");
+        let tip = line[line.len() - 1];
+        assert!((tip - Vec3::new(0.19, 0.0, 0.6)).norm() < 1e-3, "{tip:?}");
+        assert!((polyline_length(&line) - 0.19).abs() < 1e-3);
+        // The same rope past its first end instead.
+        let cloud = points(Vec3::new(-0.038, 0.0, 0.6), Vec3::new(0.152, 0.0, 0.6));
+        let (line, report) = past(&bunched(), SEEN, &cloud, &[]);
+        assert!(report.head > 0.037 && report.tail == 0.0, "{report:?}");
+        assert!(
+            (line[0] - Vec3::new(-0.038, 0.0, 0.6)).norm() < 1e-3,
+            "{:?}",
+            line[0]
+        );
+    }
+
+    #[test]
+    fn a_rope_at_its_rest_length_or_rope_it_cannot_reach_is_not_followed() {
+        // At rest, 1 cm apart: nothing is held nowhere, the rope past the
+        // end is something else.
+        let at_rest: Vec<Vec3> = (0..20)
+            .map(|i| Vec3::new(0.01 * i as f64, 0.0, 0.6))
+            .collect();
+        let cloud = points(Vec3::new(0.0, 0.0, 0.6), Vec3::new(0.23, 0.0, 0.6));
+        let (line, report) = past(&at_rest, SEEN, &cloud, &[]);
+        assert_eq!((line.len(), report), (20, PastEndsReport::default()));
+        // Bunched, but the rope past the end is 9.8 cm: more than the 3.8
+        // held nowhere and a spacing.
+        let cloud = points(Vec3::new(0.0, 0.0, 0.6), Vec3::new(0.25, 0.0, 0.6));
+        let (line, report) = past(&bunched(), SEEN, &cloud, &[]);
+        assert_eq!((line.len(), report), (20, PastEndsReport::default()));
+    }
+
+    #[test]
+    fn rope_beside_the_middle_or_a_thing_seen_before_is_not_followed() {
+        let mut cloud = points(Vec3::new(0.0, 0.0, 0.6), Vec3::new(0.152, 0.0, 0.6));
+        // 3 cm of rope-coloured line 2 cm beside nodes 6-10: nearest the
+        // middle, not an end.
+        cloud.extend(points(
+            Vec3::new(0.05, 0.02, 0.6),
+            Vec3::new(0.08, 0.02, 0.6),
+        ));
+        let (line, report) = past(&bunched(), SEEN, &cloud, &[]);
+        assert_eq!((line.len(), report), (20, PastEndsReport::default()));
+        // 2 cm of it 2 cm beside nodes 17-19: partly nearest the end, partly
+        // the middle (within the length held nowhere).
+        let mut cloud = points(Vec3::new(0.0, 0.0, 0.6), Vec3::new(0.152, 0.0, 0.6));
+        cloud.extend(points(
+            Vec3::new(0.135, 0.02, 0.6),
+            Vec3::new(0.155, 0.02, 0.6),
+        ));
+        let (line, report) = past(&bunched(), SEEN, &cloud, &[]);
+        assert_eq!((line.len(), report), (20, PastEndsReport::default()));
+        // Past the end, but where a rope-coloured thing was seen beside
+        // the rope.
+        let cloud = points(Vec3::new(0.0, 0.0, 0.6), Vec3::new(0.19, 0.0, 0.6));
+        let seen_before = points(Vec3::new(0.165, 0.0, 0.6), Vec3::new(0.19, 0.0, 0.6));
+        let (line, report) = past(&bunched(), SEEN, &cloud, &seen_before);
+        assert_eq!((line.len(), report), (20, PastEndsReport::default()));
+        // Nearest a node of the hidden run at that end: followed.
+        let cloud = points(Vec3::new(0.0, 0.0, 0.6), Vec3::new(0.19, 0.0, 0.6));
+        let tail_hidden = HiddenEnds { head: 0, tail: 3 };
+        let (_, report) = past(&bunched(), tail_hidden, &cloud, &[]);
+        assert!(report.tail > 0.037, "{report:?}");
+    }
+
     #[test]
     fn only_points_no_hidden_run_can_reach_are_beside_the_rope() {
-        // Nodes 1 cm apart, at rest 1.25 cm apart (the rope is slack); 0-2
-        // hidden (3.75 cm of rope past node 3), 10-11 hidden (3.75 cm
-        // between nodes 9 and 12, 3 cm apart).
+        // Nodes 1 cm apart, at rest 1.25 cm apart: the rope is slack, its
+        // polyline 19 cm against 23.75 (4.75 cm held nowhere, which any
+        // end or run may take). 0-2 hidden (3.75 + 4.75 = 8.5 cm of rope
+        // past node 3), 10-11 hidden (8.5 cm between nodes 9 and 12, 3 cm
+        // apart); the last end seen (4.75 cm past node 19).
         let (nodes, mut known) = rope(20, 3);
         known[10] = false;
         known[11] = false;
         let at = |x: f64, y: f64| Vec3::new(x, y, 0.6);
         let points = [
-            at(0.03, 0.037),
-            at(0.03, 0.038),
-            at(0.105, 0.01),
-            at(0.105, 0.02),
+            at(0.03, 0.0849),
+            at(0.03, 0.0851),
+            at(0.105, 0.039),
+            at(0.105, 0.041),
+            at(0.19, 0.047),
+            at(0.19, 0.048),
         ];
         let beside = beyond_hidden_reach(&nodes, &known, &points, 0.0125);
-        // 3.7 cm from node 3: the end's rope reaches; 3.8: not. Via nodes
-        // 9 and 12: 2 x 1.80 cm = 3.6 cm reaches, 2 x 2.50 cm does not.
-        assert_eq!(beside, alloc::vec![points[1], points[3]]);
+        // 8.49 cm from node 3: the end's rope reaches; 8.51: not. Via
+        // nodes 9 and 12: 2 x 4.18 cm = 8.36 cm reaches, 2 x 4.37 does
+        // not. Past the seen end: 4.7 cm reaches, 4.8 does not.
+        assert_eq!(beside, alloc::vec![points[1], points[3], points[5]]);
         assert!(beyond_hidden_reach(&nodes, &known[..5], &points, 0.01).is_empty());
-        // Nothing hidden: everything unexplained is beside the rope.
+        // Nothing hidden and nothing held nowhere (at rest 1 cm apart):
+        // everything unexplained is beside the rope.
         assert_eq!(
             beyond_hidden_reach(&nodes, &[true; 20], &points, 0.01),
             points.to_vec()

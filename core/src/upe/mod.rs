@@ -18,7 +18,7 @@ pub mod shared_motion;
 pub mod slide;
 
 use crate::perception::table::{fit_table, Plane};
-use emerging::{follow_emerged_ends, lies_on, EmergedReport, InView};
+use emerging::{follow_emerged_ends, follow_rope_past_ends, lies_on, EmergedReport, InView};
 use free_space::{clear_free_space, FreeSpaceReport};
 use length::{
     conserve_end_lengths, conserve_middle_lengths, extend_short_ends,
@@ -150,8 +150,12 @@ pub struct UpeTrackParams {
     /// Lay a hidden end onto rope that came out from under its occluder
     /// (`emerging::follow_emerged_ends`): rope in view that no node
     /// explains, next to hidden space and within the hidden run's reach,
-    /// is where a hidden end pulled out went. Default true; false is the
-    /// paper's step (hidden nodes follow their anchors only).
+    /// is where a hidden end pulled out went; and let a rope found
+    /// shorter than its rest length go on past an end along rope in view
+    /// no node explains, within what it lacks
+    /// (`emerging::follow_rope_past_ends`: EM leaves a fast-pulled end
+    /// behind). Default true; false is the paper's step (hidden nodes
+    /// follow their anchors only).
     pub follow_emerged_ends: bool,
     /// A node under another stretch of the rope where the rope crosses
     /// itself is hidden (`visibility::under_other_strand`): the images
@@ -479,10 +483,31 @@ fn run_step(
                 hidden_near: &hidden_near,
                 on_surface: &on_surface,
             };
-            follow_emerged_ends(&mut nodes, input.visible, &view, reach, spacing)
+            let laid = follow_emerged_ends(&mut nodes, input.visible, &view, reach, spacing);
+            let hidden = slide::HiddenEnds { head, tail };
+            let (longer, past) = follow_rope_past_ends(&nodes, hidden, &view, reach, spacing, m);
+            nodes = longer;
+            EmergedReport {
+                past_ends: past,
+                ..laid
+            }
         }
         _ => EmergedReport::default(),
     };
+    // An end that followed rope past it is no hidden run to keep: its
+    // nodes now lie between that rope and the rest.
+    let (head, tail) = (
+        if emerged.past_ends.head > 0.0 {
+            0
+        } else {
+            head
+        },
+        if emerged.past_ends.tail > 0.0 {
+            0
+        } else {
+            tail
+        },
+    );
     let smooth = settings.smooth_resampling;
     let kept = match (rest_spacing, keep_ends) {
         // No extension was added at a hidden end, so the hidden runs are
