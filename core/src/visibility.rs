@@ -44,6 +44,13 @@ pub fn visible_nodes_relative(
     classify_nodes(previous, cloud, radius, min_points, min_fraction).visible
 }
 
+/// `true` when more than half of the nodes are `visible`: the state sees
+/// most of its rope and is mostly right where it sees it; a state that
+/// sees less is a guess.
+pub fn sees_most(visible: &[bool]) -> bool {
+    2 * visible.iter().filter(|&&v| v).count() > visible.len()
+}
+
 /// The nodes by what the cloud shows of them.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct NodeVisibility {

@@ -68,8 +68,7 @@ impl Tracker {
         // this frame's rope points beside them (the step may have dragged
         // them off). Not where ropes alike share the frame: a node may be
         // seen on another.
-        let seen = out.visible.iter().filter(|&&v| v).count();
-        let sees_most = 2 * seen > out.visible.len();
+        let sees_most = crate::visibility::sees_most(&out.visible);
         let alike = obs.others.as_ref().is_some_and(|o| o.alike);
         if sees_most && !alike && found.seen_left_out > 0 {
             return kept(Verdict::LeavesSeenRopeOut, Some(found));

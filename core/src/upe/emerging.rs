@@ -13,6 +13,7 @@ use crate::math::{self, NearNodes, Vec3};
 use crate::perception::evidence::OCCLUDER_MARGIN;
 use crate::perception::table::Plane;
 use crate::polyline::polyline_length;
+use crate::visibility::sees_most;
 
 /// Points of rope one piece is made of are at most this many rest spacings
 /// apart: a wider gap is no longer one stretch of rope the nodes could
@@ -491,26 +492,35 @@ pub struct PastEndsReport {
 /// of the rope, the larger) is where that end went: the polyline goes on
 /// from the end node to the piece's near tip and along it. The longest
 /// such piece at each end; the head first, the tail with what is left.
-/// `nodes` is the polyline of the rope's `count` nodes (with what
-/// [`super::length::extend_short_ends`] added at a seen end), `hidden`
-/// its hidden ends, `rest_spacing` the rest length over `count - 1`.
+/// Only a state that sees most of its rope ([`crate::visibility::sees_most`])
+/// follows: one that sees less is a guess, and a rope that jumped away
+/// from it is found again by the recovery (rope no node explains is its
+/// evidence), not taken piece by piece. `nodes` is the polyline of the
+/// rope's nodes (with what [`super::length::extend_short_ends`] added at
+/// a seen end), `known` their visibility (one per node), `rest_spacing`
+/// the rest length over the node count less one.
 /// Returns the polyline with the pieces (to be spread evenly over the
 /// rope's nodes: the bunched ones slide along it) and what was added.
 pub fn follow_rope_past_ends(
     nodes: &[Vec3],
-    hidden: HiddenEnds,
+    known: &[bool],
     view: &InView<'_>,
     reach: f64,
     rest_spacing: f64,
-    count: usize,
 ) -> (Vec<Vec3>, PastEndsReport) {
     let mut report = PastEndsReport::default();
     let m = nodes.len();
     let spacing = rest_spacing;
-    let rest_length = spacing * count.saturating_sub(1) as f64;
-    if m < 3 || !(reach > 0.0) || !(rest_length > 0.0) || !nodes.iter().all(math::is_finite) {
+    let rest_length = spacing * known.len().saturating_sub(1) as f64;
+    if m < 3
+        || !sees_most(known)
+        || !(reach > 0.0)
+        || !(rest_length > 0.0)
+        || !nodes.iter().all(math::is_finite)
+    {
         return (nodes.to_vec(), report);
     }
+    let hidden = HiddenEnds::of(known);
     let mut shortfall = rest_length - polyline_length(nodes);
     if !(shortfall > super::length::MIN_SHORTFALL_SPACINGS * spacing) {
         return (nodes.to_vec(), report);
@@ -784,7 +794,10 @@ mod tests {
             hidden_near: &|_: &Vec3, _: f64| false,
             on_surface: &on_table,
         };
-        follow_rope_past_ends(nodes, hidden, &view, 0.015, 0.01, 20)
+        let known: Vec<bool> = (0..20)
+            .map(|i| i >= hidden.head && i + hidden.tail < 20)
+            .collect();
+        follow_rope_past_ends(nodes, &known, &view, 0.015, 0.01)
     }
 
     /// Twenty nodes bunched 8 mm apart along x from 0 (15.2 cm of a 19 cm
@@ -867,6 +880,11 @@ mod tests {
         let tail_hidden = HiddenEnds { head: 0, tail: 3 };
         let (_, report) = past(&bunched(), tail_hidden, &cloud, &[]);
         assert!(report.tail > 0.037, "{report:?}");
+        // A state that sees 9 of its 20 nodes is a guess: it does not
+        // follow (a rope that jumped is the recovery's).
+        let most_hidden = HiddenEnds { head: 0, tail: 11 };
+        let (line, report) = past(&bunched(), most_hidden, &cloud, &[]);
+        assert_eq!((line.len(), report), (20, PastEndsReport::default()));
     }
 
     #[test]

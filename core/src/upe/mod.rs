@@ -484,8 +484,8 @@ fn run_step(
                 on_surface: &on_surface,
             };
             let laid = follow_emerged_ends(&mut nodes, input.visible, &view, reach, spacing);
-            let hidden = slide::HiddenEnds { head, tail };
-            let (longer, past) = follow_rope_past_ends(&nodes, hidden, &view, reach, spacing, m);
+            let (longer, past) =
+                follow_rope_past_ends(&nodes, input.visible, &view, reach, spacing);
             nodes = longer;
             EmergedReport {
                 past_ends: past,
