@@ -131,10 +131,15 @@ fn a_rope_pulled_through_an_occluder_keeps_its_length_and_tightens_the_hidden_be
 /// worst, at the lift's height).
 #[test]
 fn a_hidden_wave_does_not_unroll_when_its_nodes_slide_and_are_re_spaced() {
-    let (seq, _) = written_drawn_scene(1072, 48);
-    let errors = frame_errors(&seq);
-    let worst = max(&errors);
+    let worst = worst_drawn_frame(1072);
     assert!(worst < 30.0, "worst frame {worst:.1} mm");
+}
+
+/// The worst frame's error (mm) of drawn scene `seed` (48 frames) tracked
+/// with the defaults.
+fn worst_drawn_frame(seed: u64) -> f64 {
+    let (seq, _) = written_drawn_scene(seed, 48);
+    max(&frame_errors(&seq))
 }
 
 /// Every frame's error (mm) of drawn scene `seed` (48 frames) tracked with
@@ -158,9 +163,7 @@ fn drawn_with_and_without(seed: u64, off: impl FnOnce(&mut Params)) -> (Vec<f64>
 /// frame 7.4 mm (before the end came out).
 #[test]
 fn a_lifted_end_that_came_out_from_under_its_occluder_is_followed() {
-    let (seq, _) = written_drawn_scene(1028, 48);
-    let errors = frame_errors(&seq);
-    let worst = max(&errors);
+    let worst = worst_drawn_frame(1028);
     eprintln!("drawn scene 1028: worst frame {worst:.1} mm");
     assert!(worst < 9.0, "worst frame {worst:.1} mm");
 }
@@ -197,9 +200,7 @@ fn a_hidden_end_pulled_out_from_under_its_occluder_follows_the_rope_that_came_ou
 /// 9.7 mm.
 #[test]
 fn a_short_ropes_end_follows_rope_in_view_past_it() {
-    let (seq, _) = written_drawn_scene(1016, 48);
-    let errors = frame_errors(&seq);
-    let worst = max(&errors);
+    let worst = worst_drawn_frame(1016);
     eprintln!("drawn scene 1016: worst frame {worst:.1} mm");
     assert!(worst < 12.0, "worst frame {worst:.1} mm");
 }

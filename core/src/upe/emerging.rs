@@ -6,7 +6,10 @@
 
 use alloc::vec::Vec;
 
-use super::length::{along, end_run_from_anchor, set_end_run, taut_from_pulled_end};
+use super::length::{
+    along, end_run_from_anchor, set_end_run, shortfall, taut_from_pulled_end,
+    MIN_SHORTFALL_SPACINGS,
+};
 use super::slide::HiddenEnds;
 use crate::curve::RopeCurve;
 use crate::math::{self, NearNodes, Vec3};
@@ -24,6 +27,13 @@ pub const PIECE_LINK_SPACINGS: f64 = 0.5;
 /// 0's tracked length against the truth on the randomised tuning range,
 /// 10th percentile 0.957.
 pub const REST_LENGTH_SLACK: f64 = 0.043;
+
+/// What the rope a run or an end can take may be off by: a node spacing
+/// (where its visible anchor lies) or the rest length's own error
+/// ([`REST_LENGTH_SLACK`] of `count` nodes' rope), the larger.
+fn length_slack(rest_spacing: f64, count: usize) -> f64 {
+    rest_spacing.max(REST_LENGTH_SLACK * rest_spacing * count.saturating_sub(1) as f64)
+}
 
 /// A piece shorter than this many rest spacings is not taken: a run's node
 /// could not be told to lie on it rather than beside it.
@@ -129,7 +139,7 @@ pub fn beyond_hidden_reach(
     if known.len() != m || !known.iter().any(|&k| k) {
         return Vec::new();
     }
-    let spare = (rest_spacing * m.saturating_sub(1) as f64 - polyline_length(nodes)).max(0.0);
+    let spare = shortfall(nodes, rest_spacing * m.saturating_sub(1) as f64).max(0.0);
     let runs = super::slide::hidden_runs(known);
     let to = |p: &Vec3, i: usize| math::norm(&(p - nodes[i]));
     let reaches = |p: &Vec3| {
@@ -401,9 +411,7 @@ pub fn follow_emerged_ends(
     pieces.sort_by(|a, b| b.length.total_cmp(&a.length));
     let mut taken = alloc::vec![false; pieces.len()];
     let runs = [(head, true), (tail, false)];
-    // What a run's rope may be off by: a node spacing (where its visible
-    // anchor lies) or the rope's rest length's own error, the larger.
-    let slack = rest_spacing.max(REST_LENGTH_SLACK * rest_spacing * (m - 1) as f64);
+    let slack = length_slack(rest_spacing, m);
     for (count, at_head) in runs.into_iter().filter(|&(c, _)| c > 0 && c < m) {
         let mut curve = end_run_from_anchor(nodes, count, at_head);
         let anchor = curve[0];
@@ -510,8 +518,8 @@ pub fn follow_rope_past_ends(
 ) -> (Vec<Vec3>, PastEndsReport) {
     let mut report = PastEndsReport::default();
     let m = nodes.len();
-    let spacing = rest_spacing;
-    let rest_length = spacing * known.len().saturating_sub(1) as f64;
+    let count = known.len();
+    let rest_length = rest_spacing * count.saturating_sub(1) as f64;
     if m < 3
         || !sees_most(known)
         || !(reach > 0.0)
@@ -521,11 +529,11 @@ pub fn follow_rope_past_ends(
         return (nodes.to_vec(), report);
     }
     let hidden = HiddenEnds::of(known);
-    let mut shortfall = rest_length - polyline_length(nodes);
-    if !(shortfall > super::length::MIN_SHORTFALL_SPACINGS * spacing) {
+    let mut lacking = shortfall(nodes, rest_length);
+    if !(lacking > MIN_SHORTFALL_SPACINGS * rest_spacing) {
         return (nodes.to_vec(), report);
     }
-    let link = PIECE_LINK_SPACINGS * spacing;
+    let link = PIECE_LINK_SPACINGS * rest_spacing;
     let far = unexplained_points(nodes, view.cloud, reach);
     if far.is_empty() {
         return (nodes.to_vec(), report);
@@ -545,7 +553,7 @@ pub fn follow_rope_past_ends(
     let mut pieces: [Vec<Piece>; 2] = [Vec::new(), Vec::new()];
     for set in connected_sets(&far, link) {
         let points: Vec<Vec3> = set.into_iter().map(|i| far[i]).collect();
-        if mostly_not_rope(&points, view.not_rope, spacing) {
+        if mostly_not_rope(&points, view.not_rope, rest_spacing) {
             continue;
         }
         let ends: Vec<usize> = points.iter().map(nearest).collect();
@@ -556,23 +564,23 @@ pub fn follow_rope_past_ends(
         } else {
             continue;
         };
-        if let Some(piece) =
-            Piece::of(&points, link).filter(|piece| piece.length >= MIN_PIECE_SPACINGS * spacing)
+        if let Some(piece) = Piece::of(&points, link)
+            .filter(|piece| piece.length >= MIN_PIECE_SPACINGS * rest_spacing)
         {
             pieces[side].push(piece);
         }
     }
-    let slack = spacing.max(REST_LENGTH_SLACK * rest_length);
+    let slack = length_slack(rest_spacing, count);
     let mut taken: [Option<Vec<Vec3>>; 2] = [None, None];
     for (side, end) in [(0, nodes[0]), (1, nodes[m - 1])] {
         pieces[side].sort_by(|a, b| b.length.total_cmp(&a.length));
         let choice = pieces[side].iter().find_map(|piece| {
             let line = piece.line_out_from(&end);
             let added = math::norm(&(line[0] - end)) + piece.length;
-            (added <= shortfall + slack && (view.on_surface)(&line)).then_some((line, added))
+            (added <= lacking + slack && (view.on_surface)(&line)).then_some((line, added))
         });
         if let Some((line, added)) = choice {
-            shortfall -= added;
+            lacking -= added;
             match side {
                 0 => report.head = added,
                 _ => report.tail = added,
@@ -810,6 +818,21 @@ mod tests {
 
     const SEEN: HiddenEnds = HiddenEnds { head: 0, tail: 0 };
 
+    /// The bunched rope's cloud (x from 0 to 15.2 cm) and a rope-coloured
+    /// line from `a` to `b` beside it.
+    fn bunched_beside(a: Vec3, b: Vec3) -> Vec<Vec3> {
+        let mut cloud = points(Vec3::new(0.0, 0.0, 0.6), Vec3::new(0.152, 0.0, 0.6));
+        cloud.extend(points(a, b));
+        cloud
+    }
+
+    /// The bunched rope with `hidden` ends follows nothing in `cloud`: its
+    /// polyline comes back as it was.
+    fn not_followed(hidden: HiddenEnds, cloud: &[Vec3], not_rope: &[Vec3]) {
+        let (line, report) = past(&bunched(), hidden, cloud, not_rope);
+        assert_eq!((line.len(), report), (20, PastEndsReport::default()));
+    }
+
     #[test]
     fn a_short_rope_follows_rope_in_view_past_its_end() {
         // The rope goes on in view to x = 19 cm: past node 19 (15.2) and
@@ -845,46 +868,31 @@ mod tests {
         // Bunched, but the rope past the end is 9.8 cm: more than the 3.8
         // held nowhere and a spacing.
         let cloud = points(Vec3::new(0.0, 0.0, 0.6), Vec3::new(0.25, 0.0, 0.6));
-        let (line, report) = past(&bunched(), SEEN, &cloud, &[]);
-        assert_eq!((line.len(), report), (20, PastEndsReport::default()));
+        not_followed(SEEN, &cloud, &[]);
     }
 
     #[test]
     fn rope_beside_the_middle_or_a_thing_seen_before_is_not_followed() {
-        let mut cloud = points(Vec3::new(0.0, 0.0, 0.6), Vec3::new(0.152, 0.0, 0.6));
         // 3 cm of rope-coloured line 2 cm beside nodes 6-10: nearest the
         // middle, not an end.
-        cloud.extend(points(
-            Vec3::new(0.05, 0.02, 0.6),
-            Vec3::new(0.08, 0.02, 0.6),
-        ));
-        let (line, report) = past(&bunched(), SEEN, &cloud, &[]);
-        assert_eq!((line.len(), report), (20, PastEndsReport::default()));
+        let beside = bunched_beside(Vec3::new(0.05, 0.02, 0.6), Vec3::new(0.08, 0.02, 0.6));
+        not_followed(SEEN, &beside, &[]);
         // 2 cm of it 2 cm beside nodes 17-19: partly nearest the end, partly
         // the middle (within the length held nowhere).
-        let mut cloud = points(Vec3::new(0.0, 0.0, 0.6), Vec3::new(0.152, 0.0, 0.6));
-        cloud.extend(points(
-            Vec3::new(0.135, 0.02, 0.6),
-            Vec3::new(0.155, 0.02, 0.6),
-        ));
-        let (line, report) = past(&bunched(), SEEN, &cloud, &[]);
-        assert_eq!((line.len(), report), (20, PastEndsReport::default()));
+        let beside = bunched_beside(Vec3::new(0.135, 0.02, 0.6), Vec3::new(0.155, 0.02, 0.6));
+        not_followed(SEEN, &beside, &[]);
         // Past the end, but where a rope-coloured thing was seen beside
         // the rope.
         let cloud = points(Vec3::new(0.0, 0.0, 0.6), Vec3::new(0.19, 0.0, 0.6));
         let seen_before = points(Vec3::new(0.165, 0.0, 0.6), Vec3::new(0.19, 0.0, 0.6));
-        let (line, report) = past(&bunched(), SEEN, &cloud, &seen_before);
-        assert_eq!((line.len(), report), (20, PastEndsReport::default()));
+        not_followed(SEEN, &cloud, &seen_before);
         // Nearest a node of the hidden run at that end: followed.
-        let cloud = points(Vec3::new(0.0, 0.0, 0.6), Vec3::new(0.19, 0.0, 0.6));
         let tail_hidden = HiddenEnds { head: 0, tail: 3 };
         let (_, report) = past(&bunched(), tail_hidden, &cloud, &[]);
         assert!(report.tail > 0.037, "{report:?}");
         // A state that sees 9 of its 20 nodes is a guess: it does not
         // follow (a rope that jumped is the recovery's).
-        let most_hidden = HiddenEnds { head: 0, tail: 11 };
-        let (line, report) = past(&bunched(), most_hidden, &cloud, &[]);
-        assert_eq!((line.len(), report), (20, PastEndsReport::default()));
+        not_followed(HiddenEnds { head: 0, tail: 11 }, &cloud, &[]);
     }
 
     #[test]

@@ -139,6 +139,12 @@ pub fn rest_spacing(rest_length: f64, nodes: usize) -> f64 {
 /// is left as it is (the resampled polyline's own error).
 pub const MIN_SHORTFALL_SPACINGS: f64 = 0.5;
 
+/// How much shorter the polyline through `nodes` is than `rest_length`:
+/// rope the state holds nowhere (negative when it is longer).
+pub fn shortfall(nodes: &[Vec3], rest_length: f64) -> f64 {
+    rest_length - polyline_length(nodes)
+}
+
 /// Step of the walk along an end's tangent, in node spacings.
 pub const EXTENSION_STEP_SPACINGS: f64 = 0.25;
 
@@ -218,7 +224,7 @@ pub fn extend_short_ends(
         return (nodes.to_vec(), report);
     }
     let spacing = rest_length / (m - 1) as f64;
-    let shortfall = rest_length - polyline_length(nodes);
+    let shortfall = shortfall(nodes, rest_length);
     if !(shortfall > MIN_SHORTFALL_SPACINGS * spacing) {
         return (nodes.to_vec(), report);
     }

@@ -496,18 +496,16 @@ fn run_step(
     };
     // An end that followed rope past it is no hidden run to keep: its
     // nodes now lie between that rope and the rest.
-    let (head, tail) = (
-        if emerged.past_ends.head > 0.0 {
-            0
-        } else {
-            head
-        },
-        if emerged.past_ends.tail > 0.0 {
-            0
-        } else {
-            tail
-        },
-    );
+    let head = if emerged.past_ends.head > 0.0 {
+        0
+    } else {
+        head
+    };
+    let tail = if emerged.past_ends.tail > 0.0 {
+        0
+    } else {
+        tail
+    };
     let smooth = settings.smooth_resampling;
     let kept = match (rest_spacing, keep_ends) {
         // No extension was added at a hidden end, so the hidden runs are
