@@ -917,7 +917,8 @@ mod tests {
     /// coloured, not saturated enough) makes it skipped on most blocks:
     /// rope pixels in any block, sampled or not, are still found.
     #[test]
-    fn rope_pixels_on_a_table_near_the_rope_s_colour_are_found_where_the_first_pretest_is_skipped() {
+    fn rope_pixels_on_a_table_near_the_rope_s_colour_are_found_where_the_first_pretest_is_skipped()
+    {
         let (width, height) = (640usize, 6usize);
         let table = [150u8, 120, 110];
         let rope = [200u8, 40, 30];
