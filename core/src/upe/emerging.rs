@@ -543,12 +543,9 @@ pub fn follow_rope_past_ends(
     let (head, tail) = (hidden.head.max(1), hidden.tail.max(1));
     let nearest = |p: &Vec3| {
         (0..m)
-            .min_by(|&a, &b| {
-                (p - nodes[a])
-                    .norm_squared()
-                    .total_cmp(&(p - nodes[b]).norm_squared())
-            })
-            .unwrap_or(0)
+            .map(|k| (k, (p - nodes[k]).norm_squared()))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map_or(0, |(k, _)| k)
     };
     let mut pieces: [Vec<Piece>; 2] = [Vec::new(), Vec::new()];
     for set in connected_sets(&far, link) {

@@ -496,16 +496,11 @@ fn run_step(
     };
     // An end that followed rope past it is no hidden run to keep: its
     // nodes now lie between that rope and the rest.
-    let head = if emerged.past_ends.head > 0.0 {
-        0
-    } else {
-        head
-    };
-    let tail = if emerged.past_ends.tail > 0.0 {
-        0
-    } else {
-        tail
-    };
+    let kept_run = |run: usize, added: f64| if added > 0.0 { 0 } else { run };
+    let (head, tail) = (
+        kept_run(head, emerged.past_ends.head),
+        kept_run(tail, emerged.past_ends.tail),
+    );
     let smooth = settings.smooth_resampling;
     let kept = match (rest_spacing, keep_ends) {
         // No extension was added at a hidden end, so the hidden runs are
