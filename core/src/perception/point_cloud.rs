@@ -71,8 +71,22 @@ pub fn deproject_mask(
     camera: &CameraIntrinsics,
     settings: &CloudSettings,
 ) -> Vec<Vec3> {
-    let width = frame.width as usize;
     let mut points = Vec::new();
+    for_each_masked_depth(frame, mask, settings, |u, v, z| {
+        points.push(camera.deproject(u as f64, v as f64, z));
+    });
+    points
+}
+
+/// Calls `visit(u, v, z)` for every masked pixel with a valid depth, row by
+/// row.
+fn for_each_masked_depth(
+    frame: &Frame<'_>,
+    mask: &Mask,
+    settings: &CloudSettings,
+    mut visit: impl FnMut(usize, usize, f64),
+) {
+    let width = frame.width as usize;
     for (v, row) in mask.data.chunks_exact(width).enumerate() {
         for (k, run) in row.chunks(MASK_RUN).enumerate() {
             // Most runs are empty: a test without early exit vectorises.
@@ -83,12 +97,11 @@ pub fn deproject_mask(
             for (u, _) in run.iter().enumerate().filter(|(_, &m)| m) {
                 let u = u0 + u;
                 if let Some(z) = depth_at(frame, v * width + u, settings) {
-                    points.push(camera.deproject(u as f64, v as f64, z));
+                    visit(u, v, z);
                 }
             }
         }
     }
-    points
 }
 
 /// Mask pixels tested together before deprojection looks at each.
@@ -268,21 +281,69 @@ pub fn ray_column_downsample(points: &[Vec3], leaf: f64) -> Vec<Vec3> {
         return Vec::new();
     }
     let inv = depth_sum / (n as f64 * COLUMN_WIDTH_RATIO * leaf);
-    // Each point's column (x, y), and the columns' bounding box.
-    let mut at: Vec<Option<(i64, i64)>> = Vec::with_capacity(points.len());
+    let at: Vec<Option<(i64, i64)>> = points
+        .iter()
+        .map(|p| {
+            usable(p)
+                .then(|| {
+                    let scale = inv / p.z;
+                    (floor_to_i64(p.x * scale), floor_to_i64(p.y * scale))
+                })
+                .filter(|(x, y)| x.abs() < MAX_VOXEL_INDEX && y.abs() < MAX_VOXEL_INDEX)
+        })
+        .collect();
+    summed_columns(points, &at, n, leaf)
+}
+
+/// Ray columns straight from the mask, as [`ray_column_downsample`] makes
+/// them from its deprojected points: a pixel's viewing ray, hence its
+/// column, depends on the pixel alone, so each image column and row gives
+/// its column index once instead of every point dividing by its depth.
+pub fn ray_columns_from_mask(
+    frame: &Frame<'_>,
+    mask: &Mask,
+    camera: &CameraIntrinsics,
+    settings: &CloudSettings,
+) -> Vec<Vec3> {
+    let leaf = settings.voxel_size;
+    if !(leaf > 0.0 && leaf.is_finite()) {
+        return deproject_mask(frame, mask, camera, settings);
+    }
+    let (mut points, mut pixels, mut depth_sum) = (Vec::new(), Vec::new(), 0.0);
+    for_each_masked_depth(frame, mask, settings, |u, v, z| {
+        points.push(camera.deproject(u as f64, v as f64, z));
+        pixels.push((u as u32, v as u32));
+        depth_sum += z;
+    });
+    if points.is_empty() {
+        return Vec::new();
+    }
+    let n = points.len();
+    let inv = depth_sum / (n as f64 * COLUMN_WIDTH_RATIO * leaf);
+    let index = |offset: f64, focal: f64| {
+        let k = floor_to_i64(offset / focal * inv);
+        (k.abs() < MAX_VOXEL_INDEX).then_some(k)
+    };
+    let xs: Vec<Option<i64>> = (0..frame.width)
+        .map(|u| index(u as f64 - camera.cx, camera.fx))
+        .collect();
+    let ys: Vec<Option<i64>> = (0..frame.height)
+        .map(|v| index(v as f64 - camera.cy, camera.fy))
+        .collect();
+    let at: Vec<Option<(i64, i64)>> = pixels
+        .iter()
+        .map(|&(u, v)| Some((xs[u as usize]?, ys[v as usize]?)))
+        .collect();
+    summed_columns(&points, &at, n, leaf)
+}
+
+/// The ray columns' points: `points[i]` lies in column `at[i]` (`None`:
+/// dropped); `n` points are usable, their mean depth set the columns.
+fn summed_columns(points: &[Vec3], at: &[Option<(i64, i64)>], n: usize, leaf: f64) -> Vec<Vec3> {
     let (mut lo, mut hi) = ((i64::MAX, i64::MAX), (i64::MIN, i64::MIN));
-    for p in points {
-        let column = usable(p)
-            .then(|| {
-                let scale = inv / p.z;
-                (floor_to_i64(p.x * scale), floor_to_i64(p.y * scale))
-            })
-            .filter(|(x, y)| x.abs() < MAX_VOXEL_INDEX && y.abs() < MAX_VOXEL_INDEX);
-        if let Some((x, y)) = column {
-            lo = (lo.0.min(x), lo.1.min(y));
-            hi = (hi.0.max(x), hi.1.max(y));
-        }
-        at.push(column);
+    for &(x, y) in at.iter().flatten() {
+        lo = (lo.0.min(x), lo.1.min(y));
+        hi = (hi.0.max(x), hi.1.max(y));
     }
     if lo.0 > hi.0 {
         return Vec::new();
@@ -303,7 +364,7 @@ pub fn ray_column_downsample(points: &[Vec3], leaf: f64) -> Vec<Vec3> {
     let mut columns: Vec<ColumnSum> = Vec::new();
     let column_of: Vec<u32> = points
         .iter()
-        .zip(&at)
+        .zip(at)
         .map(|(p, column)| {
             let Some((x, y)) = *column else {
                 return NO_COLUMN;
@@ -450,8 +511,15 @@ pub fn build_cloud(
     camera: &CameraIntrinsics,
     settings: &CloudSettings,
 ) -> Vec<Vec3> {
-    let raw = deproject_mask(frame, mask, camera, settings);
-    let mut cloud = downsample(&raw, settings);
+    let mut cloud = match settings.downsampling {
+        Downsampling::VoxelGrid => voxel_downsample(
+            &deproject_mask(frame, mask, camera, settings),
+            settings.voxel_size,
+        ),
+        Downsampling::RayColumns | Downsampling::Auto => {
+            ray_columns_from_mask(frame, mask, camera, settings)
+        }
+    };
     push_along_rays(&mut cloud, settings.axis_offset);
     cap_points(cloud, MAX_CLOUD_POINTS)
 }
@@ -706,6 +774,54 @@ mod tests {
         let pts = build_cloud(&f, &mask, &cam, &s);
         assert_eq!(pts.len(), 1);
         assert!((pts[0] - Vec3::new(0.0, 0.0, 0.6)).norm() < 1e-12);
+    }
+
+    /// The columns made from the mask's pixels are those made from its
+    /// deprojected points: a rope across a depth image at a slant, with
+    /// a crossing layer behind it in some columns.
+    #[test]
+    fn ray_columns_from_the_mask_are_those_of_the_deprojected_points() {
+        let (w, h) = (160u32, 120u32);
+        let cam = CameraIntrinsics {
+            width: w,
+            height: h,
+            fx: 150.0,
+            fy: 183.0,
+            cx: 79.3,
+            cy: 60.6,
+        };
+        let color = vec![0u8; 3 * (w * h) as usize];
+        let mut depth = vec![0u16; (w * h) as usize];
+        let mut mask = Mask::new(w, h);
+        for v in 0..h as usize {
+            for u in 0..w as usize {
+                let along = u as f64 * 0.4 + 20.0 - v as f64;
+                if along.abs() < 4.0 {
+                    let i = v * w as usize + u;
+                    mask.data[i] = true;
+                    // The rope nearer at its middle, a layer 60 mm behind
+                    // on a few rows.
+                    let behind = if (50..56).contains(&v) && u % 3 == 0 {
+                        60
+                    } else {
+                        0
+                    };
+                    depth[i] = (600.0 + 2.0 * along * along + 0.1 * u as f64) as u16 + behind;
+                }
+            }
+        }
+        let f = Frame::new(w, h, &color, &depth, 0.001).expect("frame");
+        let s = CloudSettings {
+            min_depth: 0.1,
+            max_depth: 3.0,
+            voxel_size: 0.016,
+            axis_offset: 0.0,
+            downsampling: Downsampling::RayColumns,
+        };
+        let from_points = ray_column_downsample(&deproject_mask(&f, &mask, &cam, &s), s.voxel_size);
+        let from_mask = ray_columns_from_mask(&f, &mask, &cam, &s);
+        assert!(from_points.len() > 30, "{} columns", from_points.len());
+        assert_eq!(from_mask, from_points);
     }
 
     #[test]
