@@ -62,12 +62,14 @@ pub struct EmReport {
 /// floor and the square of the mean node spacing (a larger start would let unregularised
 /// nodes collapse onto the cloud's centroid).
 pub fn initial_variance(cloud: &[Vec3], nodes: &[Vec3], active: &[bool], min_variance: f64) -> f64 {
-    let active_nodes: Vec<Vec3> = nodes
-        .iter()
-        .zip(active)
-        .filter(|(_, &a)| a)
-        .map(|(y, _)| *y)
-        .collect();
+    // The nodes' coordinates in three arrays, so that the nearest-node
+    // search over them vectorises.
+    let (mut xs, mut ys, mut zs) = (Vec::new(), Vec::new(), Vec::new());
+    for (y, _) in nodes.iter().zip(active).filter(|(_, &a)| a) {
+        xs.push(y.x);
+        ys.push(y.y);
+        zs.push(y.z);
+    }
     let cap = if nodes.len() > 1 {
         let spacing = polyline_length(nodes) / (nodes.len() - 1) as f64;
         (spacing * spacing).max(min_variance)
@@ -78,8 +80,9 @@ pub fn initial_variance(cloud: &[Vec3], nodes: &[Vec3], active: &[bool], min_var
     let mut n = 0usize;
     for x in cloud {
         let mut d2 = f64::INFINITY;
-        for y in &active_nodes {
-            d2 = d2.min((x - y).norm_squared());
+        for ((&nx, &ny), &nz) in xs.iter().zip(&ys).zip(&zs) {
+            let (dx, dy, dz) = (x.x - nx, x.y - ny, x.z - nz);
+            d2 = d2.min(dx * dx + dy * dy + dz * dz);
         }
         if d2 <= cap {
             sum += d2;
