@@ -499,7 +499,7 @@ fn may_be_saturated<const UPPER: bool>(
 /// so hue is computed only for candidate pixels.
 ///
 /// With `std` on x86-64, the same code compiled for AVX-512 or AVX2 runs
-/// where the processor has them ([`wide`]): the pre-tests are byte and
+/// where the processor has them (`wide`): the pre-tests are byte and
 /// 16-bit integer lanes, so the mask is the same bit for bit, two to four
 /// times as many lanes at once.
 pub fn segment(frame: &Frame<'_>, range: &HsvRange, occlusions: &[Rect]) -> Mask {
