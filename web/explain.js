@@ -78,6 +78,10 @@ function steps(v) {
       }
     },
   });
+  if (!v.checks) {
+    out.push(noStep(v, p));
+    return out;
+  }
   v.em.forEach((it, k) => {
     const next = k + 1 < v.em.length ? v.em[k + 1].nodes_px : v.registered_px;
     out.push({
@@ -146,7 +150,73 @@ function steps(v) {
       nodes(v.resampled_px, MAIN_COLOURS.visible, v.visible, MAIN_COLOURS.hidden);
     },
   });
+  out.push(checksStep(v));
   return out;
+}
+
+// What each verdict of the recovery tests means (the result file's
+// `checks.verdict`).
+function verdictText(c) {
+  const f = c.found;
+  const found = f ? `the rope found (${fmt(f.length * 100, 0)} cm long${f.diameter ? `, ${fmt(f.diameter * 1000, 1)} mm thick` : ''})` : 'the rope found';
+  switch (c.verdict) {
+    case 'agreed': return 'the state agrees with the images and is kept.';
+    case 'waited': return 'recoveries in a row back off, so the state is kept on this frame without looking.';
+    case 'nothing_found': return 'the images were searched and hold no rope: the state is kept.';
+    case 'other_thickness': return `${found} is not as thick as the rope tracked (another rope-coloured thing): the state is kept.`;
+    case 'beside_the_rope': return `only the unexplained share fired and ${found} is the rope tracked: what was left unexplained lies beside the rope, and is remembered as not rope.`;
+    case 'leaves_seen_rope_out': return `${found} leaves out ${f ? f.seen_left_out : 'some'} nodes the state sees on rope: it is something else, or only part of the rope, and the state is kept.`;
+    case 'recovered': return `${found} replaced the state (white): the frame is reported as recovered.`;
+    default: return c.verdict.replace(/_/g, ' ');
+  }
+}
+
+// The recovery tests after the step (this project's addition).
+function checksStep(v) {
+  const c = v.checks, l = v.limits;
+  const pct = (x) => `${fmt(100 * x, 0)} %`;
+  const fired = (name) => (c.fired.includes(name) ? '; it fired' : '');
+  const stretch = c.stretch == null ? 'no rest length is known' : `the rope is ${pct(c.stretch)} of its rest length (above ${pct(l.stretch)} it is stretched)${fired('stretched')}`;
+  const freeSpace = `${c.left_in_free_space} of the ${c.hidden_in_free_space} hidden nodes found where the images show the table, not rope, stayed there after the correction (at least ${l.nodes_in_free_space} and most of them contradict)${fired('free_space')}`;
+  const unexplained = `${pct(c.unexplained)} of the ${c.cloud_points} cloud points lie farther than ${fmt(l.unexplained_reach_mm, 0)} mm from the nodes' axis (above ${pct(l.unexplained)} the nodes miss rope in view)${fired('unexplained')}`;
+  const recovered = c.verdict === 'recovered';
+  return {
+    name: 'checks', title: 'Recovery tests',
+    text: `After the step, three tests read the state against the images (this project's addition: a state the images contradict is replaced by the rope found again). Stretch: ${stretch}. Free space: ${freeSpace}. Unexplained: ${unexplained}. ${c.fired.length ? `Fired: ${c.fired.map((x) => x.replace(/_/g, ' ')).join(', ')}; ` : 'None fired: '}${verdictText(c)}`,
+    draw: () => {
+      dim();
+      dots(v.cloud_px, COLOURS.cloud, 1.5);
+      if (recovered) {
+        polyline(v.resampled_px, 'rgba(255,255,255,0.35)');
+        polyline(v.output_px, MAIN_COLOURS.line);
+        dots(v.output_px, '#ffffff', 3);
+      } else {
+        polyline(v.output_px, MAIN_COLOURS.line);
+        nodes(v.output_px, MAIN_COLOURS.visible, v.visible, MAIN_COLOURS.hidden);
+      }
+    },
+  };
+}
+
+// A frame on which no step ran: the state was replaced or dropped after
+// the visibility test.
+function noStep(v, p) {
+  const seen = v.visible.filter(Boolean).length;
+  const text = {
+    recovered: `Only ${seen} of ${v.visible.length} nodes are visible, fewer than ${fmt(100 * p.reinit_visible_fraction, 0)} % of them: the rope may have jumped. The images were searched for the whole rope, and the one found replaced the state (white) before any step.`,
+    initialised: `No node is visible: the state was dropped and the rope found again in this frame (white).`,
+    lost: `No node is visible and no rope was found in the images: the rope is lost, and is looked for again on the next frames.`,
+  }[v.status] || `No step ran on this frame (status: ${v.status}).`;
+  return {
+    name: 'no-step', title: 'No step: the state replaced or dropped',
+    text,
+    draw: () => {
+      dim();
+      dots(v.cloud_px, COLOURS.cloud, 1.5);
+      polyline(v.previous_px, 'rgba(255,255,255,0.35)');
+      if (v.status !== 'lost') { polyline(v.output_px, MAIN_COLOURS.line); dots(v.output_px, '#ffffff', 3); }
+    },
+  };
 }
 
 // ---------- drawing ----------

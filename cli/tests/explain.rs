@@ -3,6 +3,7 @@
 //! iteration, the hidden nodes left where EM found them and placed by the
 //! sweeps.
 
+use upetrack::tracker::{FrameStatus, Verdict};
 use upetrack::{Frame, Params, Tracker};
 use upetrack_synth::{RenderSettings, Scenario, ScenarioKind};
 
@@ -21,6 +22,10 @@ fn an_explained_frame_is_the_update_itself_stage_by_stage() {
         let out = tracker.update(&frame, &obs);
         assert_eq!(e.output.nodes, out.nodes, "frame {}", f.index);
         assert_eq!(e.output.status, out.status);
+        assert_eq!(e.output.judgement, out.judgement);
+        if out.status != FrameStatus::Tracked {
+            continue;
+        }
         let Some(step) = &e.step else {
             assert!(
                 f.index == 0 || e.previous.is_empty(),
@@ -96,5 +101,42 @@ fn an_explained_frame_is_the_update_itself_stage_by_stage() {
     assert!(
         stepped >= 25 && with_hidden >= 10 && tips > 0,
         "{stepped} frames stepped, {with_hidden} with hidden nodes, {tips} ends carried to their tips"
+    );
+}
+
+/// A frame whose step contradicted the images and was replaced by the rope
+/// found again (drawn tuning scene 1032, frame 21) is explained with the
+/// step that ran and the recovery tests that read it, not as a frame
+/// without a step.
+#[test]
+fn a_frame_recovered_after_its_step_is_explained_with_the_step_and_its_tests() {
+    let mut s = Scenario::random(1032, 48);
+    let camera = s.camera();
+    let mut tracker = Tracker::new(Params::default(), camera, s.hsv()).expect("tracker");
+    tracker.set_frame_rate(s.fps()).expect("frame rate");
+    let mut recovered = None;
+    while let Some(f) = s.next_frame() {
+        let frame =
+            Frame::new(camera.width, camera.height, &f.rgb, &f.depth, 0.001).expect("frame");
+        let obs = tracker
+            .observe(&frame, &s.occlusions_at(f.index))
+            .expect("observe");
+        let e = tracker.explain(&frame, &obs);
+        let out = tracker.update(&frame, &obs);
+        assert_eq!(e.output.nodes, out.nodes, "frame {}", f.index);
+        if matches!(out.status, FrameStatus::Recovered(_)) {
+            recovered = Some((f.index, e));
+            break;
+        }
+    }
+    let (index, e) = recovered.expect("no frame recovered");
+    let judgement = e.output.judgement.expect("the recovery tests' reading");
+    assert_eq!(judgement.verdict, Verdict::Recovered, "frame {index}");
+    assert!(judgement.measured.contradicts(), "frame {index}");
+    let step = e.step.expect("the step that ran");
+    assert_eq!(step.em[0].nodes, e.previous, "frame {index}");
+    assert_ne!(
+        step.resampled, e.output.nodes,
+        "frame {index}: the state was replaced"
     );
 }

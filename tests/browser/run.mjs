@@ -456,7 +456,7 @@ await test('explain mode: a deep link opens at its step; steps change the drawin
       em: e.view.em.length, iterations: e.view.em.map((it) => it.line_point.length) };
   });
   assert(first.index === 72 && first.step === 'em-2' && /EM iteration 2 of \d+ \(Eq\. 1-5\)/.test(first.title) && /σ² = [0-9.]+ mm²/.test(first.text), `opened at: ${JSON.stringify(first).slice(0, 300)}`);
-  const want = ['segmentation', 'cloud', 'visibility', ...Array.from({ length: first.em }, (_, k) => `em-${k + 1}`), 'upe', 'resampling'];
+  const want = ['segmentation', 'cloud', 'visibility', ...Array.from({ length: first.em }, (_, k) => `em-${k + 1}`), 'upe', 'resampling', 'checks'];
   assert(first.names.join() === want.join(), `steps: ${first.names}`);
   assert(first.iterations.every((n) => n > 100), `responsibility lines per iteration: ${first.iterations}`);
   const worst = Math.max(...first.out.map((c, k) => Math.abs(c - first.tracked[k])));
@@ -473,13 +473,18 @@ await test('explain mode: a deep link opens at its step; steps change the drawin
     texts.add(await page.evaluate(() => document.getElementById('explain-title').textContent + document.getElementById('explain-text').textContent));
   }
   const last = await page.evaluate(() => ({ step: window.upetrack.state.explain.steps[window.upetrack.state.explain.at].name, next: document.getElementById('explain-next').disabled }));
-  assert(last.step === 'resampling' && last.next, `after stepping forward: ${JSON.stringify(last)}`);
+  assert(last.step === 'checks' && last.next, `after stepping forward: ${JSON.stringify(last)}`);
+  // The recovery tests after the step: what each measured, and the verdict.
+  const checks = await page.evaluate(() => document.getElementById('explain-text').textContent);
+  console.log(`     ${checks}`);
+  assert(/Stretch: the rope is \d+ % of its rest length/.test(checks) && /None fired: the state agrees with the images/.test(checks), `checks text: ${checks.slice(0, 400)}`);
+  assert(seen.size === want.length && texts.size === want.length, `${seen.size} drawings and ${texts.size} texts over ${want.length} steps`);
+  await page.screenshot({ path: path.join(artifacts, 'explain-checks.png') });
+  await page.click('#explain-back');
   // The length stage between UPE and resampling is told (on by default).
   const resampling = await page.evaluate(() => document.getElementById('explain-text').textContent);
   assert(/rope that slid out of it on this frame/.test(resampling), `resampling text: ${resampling.slice(0, 300)}`);
-  assert(seen.size === want.length && texts.size === want.length, `${seen.size} drawings and ${texts.size} texts over ${want.length} steps`);
   await page.screenshot({ path: path.join(artifacts, 'explain-resampling.png') });
-  await page.click('#explain-back');
   await page.click('#explain-back');
   const upe = await page.evaluate(() => window.upetrack.state.explain.steps[window.upetrack.state.explain.at].name);
   assert(upe === first.names[first.names.length - 3], `two steps back: ${upe}`);

@@ -3,8 +3,12 @@
 
 use serde::Serialize;
 use upetrack::perception::point_cloud::deproject_mask;
+use upetrack::tracker::{
+    MIN_NODES_IN_FREE_SPACE, STRETCH_LIMIT, UNEXPLAINED_LIMIT, UNEXPLAINED_REACH,
+};
 use upetrack::upe::registration::responsibilities;
 use upetrack::{CameraIntrinsics, Frame, Vec3};
+use upetrack_io::result::ChecksRecord;
 use wasm_bindgen::prelude::*;
 
 use crate::{js_err, project_all, rects_of, to_js, DecodedFrame, WasmTracker};
@@ -51,6 +55,24 @@ struct ExplainView {
     /// Rope length before and after resampling, millimetres.
     length_before_mm: f64,
     length_after_mm: f64,
+    /// What the recovery tests read after the step and what came of it
+    /// (as the result file's `checks`), when a step ran.
+    checks: Option<ChecksRecord>,
+    /// The tests' thresholds.
+    limits: CheckLimits,
+}
+
+/// The recovery tests' thresholds, for the explanation's text.
+#[derive(Serialize)]
+struct CheckLimits {
+    /// Tracked length over rest length beyond which the state is stretched.
+    stretch: f64,
+    /// Hidden nodes left in free space that contradict the state.
+    nodes_in_free_space: usize,
+    /// Share of the cloud left unexplained that contradicts the state.
+    unexplained: f64,
+    /// How far from the nodes' axis a point is unexplained, millimetres.
+    unexplained_reach_mm: f64,
 }
 
 fn length_mm(nodes: &[Vec3]) -> f64 {
@@ -178,6 +200,13 @@ impl WasmTracker {
             output_px: px(&e.output.nodes),
             length_before_mm: step.map_or(f64::NAN, |s| length_mm(&s.before_resampling)),
             length_after_mm: step.map_or(f64::NAN, |s| length_mm(&s.resampled)),
+            checks: e.output.judgement.as_ref().map(ChecksRecord::of),
+            limits: CheckLimits {
+                stretch: STRETCH_LIMIT,
+                nodes_in_free_space: MIN_NODES_IN_FREE_SPACE,
+                unexplained: UNEXPLAINED_LIMIT,
+                unexplained_reach_mm: 1000.0 * UNEXPLAINED_REACH * params.visibility_radius,
+            },
         };
         self.last_masks = None;
         self.last_obs = Some(obs);

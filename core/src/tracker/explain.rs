@@ -3,7 +3,7 @@
 
 use alloc::vec::Vec;
 
-use super::{FrameOutput, FrameStatus, Observation, Tracker};
+use super::{FrameOutput, Observation, Tracker};
 use crate::math::Vec3;
 use crate::perception::frame::Frame;
 use crate::step::Algorithm;
@@ -21,7 +21,9 @@ pub struct FrameExplanation {
     pub neighbour_counts: Vec<usize>,
     /// The shared visibility of the previous nodes.
     pub visible: Vec<bool>,
-    /// Every stage of the UPETrack step, when the frame was tracked by one.
+    /// Every stage of the UPETrack step, when one ran (the frame was
+    /// tracked, or recovered after the step contradicted the images; its
+    /// recovery tests are `output.judgement`).
     pub step: Option<StepExplanation>,
 }
 
@@ -40,8 +42,10 @@ impl Tracker {
             &obs.cloud,
             &self.evidence(&self.camera, frame, obs),
         );
-        let tracked = output.status == FrameStatus::Tracked;
-        let step = (tracked && self.params.algorithm == Algorithm::Upetrack).then(|| {
+        // A step ran when the recovery tests read one: on a tracked frame,
+        // and on one recovered after its step contradicted the images.
+        let stepped = output.judgement.is_some();
+        let step = (stepped && self.params.algorithm == Algorithm::Upetrack).then(|| {
             let camera = self.camera;
             let not_rope = self.state.as_ref().map_or(&[][..], |s| &s.not_rope);
             let input = self.step_input(&camera, frame, obs, &previous, &classes, not_rope);
