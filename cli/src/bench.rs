@@ -194,5 +194,9 @@ pub fn cmd_bench(args: &BenchArgs) -> Result<(), CliError> {
             );
         }
     }
+    println!(
+        "\nSegmentation ran its {} variant (chosen for this processor; every variant gives the same mask).",
+        upetrack::perception::segmentation::segmentation_variant()
+    );
     Ok(())
 }

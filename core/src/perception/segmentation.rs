@@ -510,6 +510,17 @@ pub fn segment(frame: &Frame<'_>, range: &HsvRange, occlusions: &[Rect]) -> Mask
     segment_portable(frame, range, occlusions)
 }
 
+/// Which variant [`segment`] runs on this processor: `"AVX-512"`, `"AVX2"`
+/// or `"portable"` (every variant gives the same mask; only its speed
+/// differs, so a benchmark names it).
+pub fn segmentation_variant() -> &'static str {
+    #[cfg(all(feature = "std", target_arch = "x86_64"))]
+    if let Some(name) = wide::name() {
+        return name;
+    }
+    "portable"
+}
+
 /// [`segment`] with the instructions every target has (what wasm runs).
 #[inline(always)]
 fn segment_portable(frame: &Frame<'_>, range: &HsvRange, occlusions: &[Rect]) -> Mask {
@@ -629,6 +640,32 @@ fn segment_portable(frame: &Frame<'_>, range: &HsvRange, occlusions: &[Rect]) ->
 mod wide {
     use super::{segment_portable, Frame, HsvRange, Mask, Rect};
 
+    /// The variants, widest first.
+    #[derive(Clone, Copy)]
+    enum Width {
+        Avx512,
+        Avx2,
+    }
+
+    /// The widest variant this processor runs (AVX-512BW implies AVX-512F).
+    fn widest() -> Option<Width> {
+        if std::is_x86_feature_detected!("avx512bw") {
+            Some(Width::Avx512)
+        } else if std::is_x86_feature_detected!("avx2") {
+            Some(Width::Avx2)
+        } else {
+            None
+        }
+    }
+
+    /// The name of the variant [`segment`] runs, `None` for the portable one.
+    pub(super) fn name() -> Option<&'static str> {
+        widest().map(|w| match w {
+            Width::Avx512 => "AVX-512",
+            Width::Avx2 => "AVX2",
+        })
+    }
+
     /// The mask from the widest variant this processor runs, `None` when
     /// it has neither AVX-512BW nor AVX2.
     pub(super) fn segment(
@@ -636,18 +673,14 @@ mod wide {
         range: &HsvRange,
         occlusions: &[Rect],
     ) -> Option<Mask> {
-        if std::is_x86_feature_detected!("avx512bw") {
-            // SAFETY: the processor has the features `avx512` is compiled for
-            // (AVX-512BW implies AVX-512F).
+        Some(match widest()? {
+            // SAFETY: `widest` found the features `avx512` is compiled for.
             #[allow(unsafe_code)]
-            return Some(unsafe { avx512(frame, range, occlusions) });
-        }
-        if std::is_x86_feature_detected!("avx2") {
-            // SAFETY: the processor has the features `avx2` is compiled for.
+            Width::Avx512 => unsafe { avx512(frame, range, occlusions) },
+            // SAFETY: `widest` found the features `avx2` is compiled for.
             #[allow(unsafe_code)]
-            return Some(unsafe { avx2(frame, range, occlusions) });
-        }
-        None
+            Width::Avx2 => unsafe { avx2(frame, range, occlusions) },
+        })
     }
 
     /// Every variant this processor runs, by name, for the tests to
