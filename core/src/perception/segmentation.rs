@@ -705,13 +705,21 @@ mod wide {
         masks
     }
 
+    // `unsafe fn`: a safe function with `target_feature` needs Rust 1.86,
+    // and the workspace's `rust-version` is 1.85.
+    /// # Safety
+    /// The processor has AVX-512F and AVX-512BW.
+    #[allow(unsafe_code)]
     #[target_feature(enable = "avx512f,avx512bw")]
-    fn avx512(frame: &Frame<'_>, range: &HsvRange, occlusions: &[Rect]) -> Mask {
+    unsafe fn avx512(frame: &Frame<'_>, range: &HsvRange, occlusions: &[Rect]) -> Mask {
         segment_portable(frame, range, occlusions)
     }
 
+    /// # Safety
+    /// The processor has AVX2.
+    #[allow(unsafe_code)]
     #[target_feature(enable = "avx2")]
-    fn avx2(frame: &Frame<'_>, range: &HsvRange, occlusions: &[Rect]) -> Mask {
+    unsafe fn avx2(frame: &Frame<'_>, range: &HsvRange, occlusions: &[Rect]) -> Mask {
         segment_portable(frame, range, occlusions)
     }
 }
