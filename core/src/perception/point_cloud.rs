@@ -470,16 +470,6 @@ const DENSE_COLUMNS_PER_POINT: u64 = 4;
 /// ...or at most this many columns (a small cloud).
 const MIN_DENSE_COLUMNS: u64 = 1 << 16;
 
-/// The cloud's points downsampled as `settings` says.
-pub fn downsample(points: &[Vec3], settings: &CloudSettings) -> Vec<Vec3> {
-    match settings.downsampling {
-        Downsampling::VoxelGrid => voxel_downsample(points, settings.voxel_size),
-        Downsampling::RayColumns | Downsampling::Auto => {
-            ray_column_downsample(points, settings.voxel_size)
-        }
-    }
-}
-
 /// Moves each point `offset` metres farther along its viewing ray. A camera
 /// sees a rope's front surface; its centre line lies on average
 /// [`SURFACE_TO_AXIS_RATIO`] times the radius behind it.

@@ -647,23 +647,48 @@ mod wide {
         Avx2,
     }
 
-    /// The widest variant this processor runs (AVX-512BW implies AVX-512F).
-    fn widest() -> Option<Width> {
-        if std::is_x86_feature_detected!("avx512bw") {
-            Some(Width::Avx512)
-        } else if std::is_x86_feature_detected!("avx2") {
-            Some(Width::Avx2)
-        } else {
-            None
+    const WIDEST_FIRST: [Width; 2] = [Width::Avx512, Width::Avx2];
+
+    impl Width {
+        /// Whether this processor has the variant's features (AVX-512BW
+        /// implies AVX-512F).
+        fn available(self) -> bool {
+            match self {
+                Width::Avx512 => std::is_x86_feature_detected!("avx512bw"),
+                Width::Avx2 => std::is_x86_feature_detected!("avx2"),
+            }
+        }
+
+        fn name(self) -> &'static str {
+            match self {
+                Width::Avx512 => "AVX-512",
+                Width::Avx2 => "AVX2",
+            }
+        }
+
+        /// The mask from this variant, `None` when the processor lacks it.
+        fn segment(self, frame: &Frame<'_>, range: &HsvRange, occlusions: &[Rect]) -> Option<Mask> {
+            if !self.available() {
+                return None;
+            }
+            // SAFETY: the processor has the features the variant is
+            // compiled for (checked just above).
+            #[allow(unsafe_code)]
+            Some(unsafe {
+                match self {
+                    Width::Avx512 => avx512(frame, range, occlusions),
+                    Width::Avx2 => avx2(frame, range, occlusions),
+                }
+            })
         }
     }
 
     /// The name of the variant [`segment`] runs, `None` for the portable one.
     pub(super) fn name() -> Option<&'static str> {
-        widest().map(|w| match w {
-            Width::Avx512 => "AVX-512",
-            Width::Avx2 => "AVX2",
-        })
+        WIDEST_FIRST
+            .into_iter()
+            .find(|w| w.available())
+            .map(Width::name)
     }
 
     /// The mask from the widest variant this processor runs, `None` when
@@ -673,14 +698,9 @@ mod wide {
         range: &HsvRange,
         occlusions: &[Rect],
     ) -> Option<Mask> {
-        Some(match widest()? {
-            // SAFETY: `widest` found the features `avx512` is compiled for.
-            #[allow(unsafe_code)]
-            Width::Avx512 => unsafe { avx512(frame, range, occlusions) },
-            // SAFETY: `widest` found the features `avx2` is compiled for.
-            #[allow(unsafe_code)]
-            Width::Avx2 => unsafe { avx2(frame, range, occlusions) },
-        })
+        WIDEST_FIRST
+            .into_iter()
+            .find_map(|w| w.segment(frame, range, occlusions))
     }
 
     /// Every variant this processor runs, by name, for the tests to
@@ -691,18 +711,10 @@ mod wide {
         range: &HsvRange,
         occlusions: &[Rect],
     ) -> alloc::vec::Vec<(&'static str, Mask)> {
-        let mut masks = alloc::vec::Vec::new();
-        if std::is_x86_feature_detected!("avx512bw") {
-            // SAFETY: as in `segment`.
-            #[allow(unsafe_code)]
-            masks.push(("avx512", unsafe { avx512(frame, range, occlusions) }));
-        }
-        if std::is_x86_feature_detected!("avx2") {
-            // SAFETY: as in `segment`.
-            #[allow(unsafe_code)]
-            masks.push(("avx2", unsafe { avx2(frame, range, occlusions) }));
-        }
-        masks
+        WIDEST_FIRST
+            .into_iter()
+            .filter_map(|w| Some((w.name(), w.segment(frame, range, occlusions)?)))
+            .collect()
     }
 
     // `unsafe fn`: a safe function with `target_feature` needs Rust 1.86,
